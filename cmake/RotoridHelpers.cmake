@@ -1,0 +1,37 @@
+# Compile options for our own code only (dependencies are never built with -Werror or sanitizers).
+function(rotorid_target_options target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor)
+  if(ROTORID_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(ROTORID_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
+                                             -fno-sanitize-recover=undefined)
+    target_link_options(${target} PUBLIC -fsanitize=address,undefined)
+  endif()
+endfunction()
+
+# rotorid_add_module(name DEPS ...): a static component built from src/<name>/*.cc.
+function(rotorid_add_module name)
+  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
+  file(GLOB sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/${name}/*.cc)
+  add_library(rotorid_${name} STATIC ${sources} ${PROJECT_SOURCE_DIR}/src/module_anchor.cc)
+  target_include_directories(rotorid_${name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>)
+  target_include_directories(rotorid_${name} PRIVATE ${PROJECT_SOURCE_DIR}/src)
+  target_link_libraries(rotorid_${name} PUBLIC ${ARG_DEPS})
+  target_compile_features(rotorid_${name} PUBLIC cxx_std_17)
+  rotorid_target_options(rotorid_${name})
+  set(ROTORID_MODULES ${ROTORID_MODULES} rotorid_${name} PARENT_SCOPE)
+endfunction()
+
+# rotorid_add_test(file.cc): one GoogleTest executable per file, each test registered with CTest.
+function(rotorid_add_test source)
+  get_filename_component(name ${source} NAME_WE)
+  add_executable(${name} ${source})
+  target_link_libraries(${name} PRIVATE rotorid::rotorid rotorid_test_support GTest::gtest GTest::gmock GTest::gtest_main)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/src)
+  rotorid_target_options(${name})
+  gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+                       PROPERTIES ENVIRONMENT "ROTORID_SOURCE_DIR=${PROJECT_SOURCE_DIR};ROTORID_BINARY=$<TARGET_FILE:rotorid_cli>")
+endfunction()

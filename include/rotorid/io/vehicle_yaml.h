@@ -1,0 +1,15 @@
+#pragma once
+
+#include <string>
+
+#include "rotorid/core/vehicle.h"
+
+namespace rotorid {
+
+// Reads a vehicle file (INTERFACE.md section 3). Throws rotorid::Error naming file, line and
+// column of what is wrong.
+Vehicle ReadVehicleYaml(const std::string& path);
+Vehicle ParseVehicleYaml(const std::string& text, const std::string& source_name);
+std::string VehicleToYaml(const Vehicle& vehicle);
+
+}  // namespace rotorid

@@ -1,0 +1,20 @@
+#include "rotorid/core/vehicle.h"
+
+#include <cmath>
+
+namespace rotorid {
+
+std::string Vehicle::Validate() const {
+  if (name.empty()) return "vehicle name is empty";
+  if (name.find('.') != std::string::npos) return "vehicle name '" + name + "' must not contain '.'";
+  if (!(mass_kg > 0.0) || !std::isfinite(mass_kg)) return "mass must be a positive number of kg";
+  if (rotors.empty()) return "vehicle has no rotors";
+  for (size_t i = 0; i < rotors.size(); ++i) {
+    if (!rotors[i].position_m.allFinite()) return "rotor " + std::to_string(i + 1) + " position is not finite";
+    if (rotors[i].spin != 1 && rotors[i].spin != -1)
+      return "rotor " + std::to_string(i + 1) + " spin must be +1 or -1";
+  }
+  return {};
+}
+
+}  // namespace rotorid
