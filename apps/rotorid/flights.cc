@@ -1,7 +1,7 @@
 #include "commands.h"
 
 #include "rotorid/core/error.h"
-#include "rotorid/io/flight_csv.h"
+#include "rotorid/io/flight_source.h"
 #include "rotorid/io/vehicle_yaml.h"
 
 namespace rotorid::cli {
@@ -38,7 +38,7 @@ std::vector<Flight> LoadFlights(const std::vector<std::string>& vehicle_paths, c
   for (size_t i = 0; i < log_paths.size(); ++i) {
     Flight flight;
     flight.vehicle = ReadVehicleYaml(vehicle_paths[i]);
-    flight.log = ReadFlightCsv(log_paths[i], flight.vehicle.num_rotors());
+    flight.log = LoadFlightLog(log_paths[i], flight.vehicle);
     flight.weight = weights.empty() ? 1.0 : weights[i];
     if (!(flight.weight > 0.0)) throw Error("--weight must be positive, got " + std::to_string(flight.weight));
     flights.push_back(std::move(flight));

@@ -1,0 +1,40 @@
+#include "rotorid/io/flight_source.h"
+
+#include <fstream>
+
+#include "rotorid/core/error.h"
+#include "rotorid/io/flight_csv.h"
+
+namespace rotorid {
+
+std::string FlightSourceOptions::Validate() const {
+  if (rotor_signal != "auto" && rotor_signal != "rpm" && rotor_signal != "command")
+    return "rotor signal must be auto, rpm or command, got '" + rotor_signal + "'";
+  return {};
+}
+
+LogFormat DetectLogFormat(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open");
+  char head[8] = {};
+  in.read(head, sizeof(head));
+  const std::string magic(head, static_cast<size_t>(in.gcount()));
+  if (magic.size() >= 7 && magic.compare(0, 4, "ULog") == 0) return LogFormat::kULog;
+  if (!magic.empty() && static_cast<unsigned char>(magic[0]) == 0xBC) return LogFormat::kCrazyflieUsd;
+  return LogFormat::kCsv;
+}
+
+FlightLog LoadFlightLog(const std::string& path, const Vehicle& vehicle, const FlightSourceOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  switch (DetectLogFormat(path)) {
+    case LogFormat::kCsv:
+      return ReadFlightCsv(path, vehicle.num_rotors());
+    case LogFormat::kULog:
+      throw Error(path + ": PX4 ULog input is not available in this build yet");
+    case LogFormat::kCrazyflieUsd:
+      throw Error(path + ": Crazyflie micro-SD input is not available in this build yet");
+  }
+  return {};
+}
+
+}  // namespace rotorid
