@@ -10,8 +10,9 @@
 
 #include <CLI/CLI.hpp>
 
-#include "rotorid/core/flight_log.h"
-#include "rotorid/core/vehicle.h"
+#include "rotorid/ident/identify.h"
+#include "rotorid/ident/tls.h"
+#include "rotorid/io/flight_source.h"
 
 namespace rotorid::cli {
 
@@ -34,21 +35,36 @@ struct FlightOptions {
   bool verbose = false;
 };
 
-// One flight with its vehicle, as given on the command line.
-struct Flight {
-  Vehicle vehicle;
-  FlightLog log;
-  double weight = 1.0;
+// Options of the identification shared by identify, refine, delay, ablate and diagnose.
+struct IdentifyCliOptions {
+  std::string method = "noise-aware";
+  std::string source = "imu";
+  std::vector<std::string> fixed_zero;
+  std::string rotor_signal = "auto";
+  std::string column_map;
+  IdentifyOptions identify;
 };
 
 // Registers --vehicle/--log/--weight (and --validate-vehicle/--validate-log when `held_out`),
 // --json, --report, --quiet, --verbose.
 void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out);
+// Registers the signal-processing and TLS options.
+void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* options);
+// Turns the parsed strings into library options (throws rotorid::Error on invalid values).
+IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* options);
+FlightSourceOptions SourceOptions(const IdentifyCliOptions& options);
+
 // Reads the paired flights; throws rotorid::Error naming the file at fault.
-std::vector<Flight> LoadFlights(const std::vector<std::string>& vehicle_paths, const std::vector<std::string>& log_paths,
-                                const std::vector<double>& weights);
-std::vector<Flight> LoadTrainingFlights(const FlightOptions& options);
-std::vector<Flight> LoadValidationFlights(const FlightOptions& options);
+std::vector<FlightData> LoadFlights(const std::vector<std::string>& vehicle_paths,
+                                    const std::vector<std::string>& log_paths, const std::vector<double>& weights,
+                                    const FlightSourceOptions& source);
+std::vector<FlightData> LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
+std::vector<FlightData> LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source);
+
+// Human-readable output.
+std::string FormatComponents(const std::vector<std::optional<double>>& values);
+void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution);
+void PrintWarnings(const std::vector<std::string>& warnings);
 
 Command AddSimulateCommand(CLI::App& root);
 Command AddIdentifyCommand(CLI::App& root);

@@ -1,8 +1,11 @@
-#include "commands.h"
+#include <iomanip>
+#include <sstream>
+#include <iostream>
 
+#include "commands.h"
 #include "rotorid/core/error.h"
-#include "rotorid/io/flight_source.h"
 #include "rotorid/io/vehicle_yaml.h"
+#include "rotorid/model/parameters.h"
 
 namespace rotorid::cli {
 
@@ -10,35 +13,78 @@ void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out) {
   app->add_option("--vehicle", options->vehicle_paths, "vehicle file (YAML); repeat for several configurations")
       ->required()
       ->check(CLI::ExistingFile);
-  app->add_option("--log", options->log_paths, "flight log, paired in order with --vehicle")
+  app->add_option("--log", options->log_paths, "flight log (CSV, PX4 ULog or Crazyflie micro-SD), paired with --vehicle")
       ->required()
       ->check(CLI::ExistingFile);
-  app->add_option("--weight", options->weights, "weight of each --vehicle/--log pair (default 1)");
+  app->add_option("--weight", options->weights, "weight of each --vehicle/--log pair (default 1; the paper uses 2 for B)");
   if (held_out) {
     app->add_option("--validate-vehicle", options->validate_vehicle_paths, "vehicle file of a held-out flight")
         ->check(CLI::ExistingFile);
     app->add_option("--validate-log", options->validate_log_paths, "held-out flight log, paired with --validate-vehicle")
         ->check(CLI::ExistingFile);
   }
-  app->add_option("--json", options->json_path, "write the machine-readable report here");
+  app->add_option("--json", options->json_path, "write the machine-readable report to this file");
   app->add_option("--report", options->report_dir, "write an HTML report with figures into this folder");
   app->add_flag("--quiet,-q", options->quiet, "print nothing but errors");
   app->add_flag("--verbose,-v", options->verbose, "print solver details");
 }
 
-std::vector<Flight> LoadFlights(const std::vector<std::string>& vehicle_paths, const std::vector<std::string>& log_paths,
-                                const std::vector<double>& weights) {
+void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* o) {
+  ObservationOptions& obs = o->identify.observation;
+  TlsOptions& tls = o->identify.tls;
+  app->add_option("--method", o->method, "noise-aware (default: errors-in-variables TLS with calibrated statistics) "
+                                          "or paper (the published procedure, for comparison)")
+      ->capture_default_str();
+  app->add_option("--source", o->source, "imu or mocap")->capture_default_str();
+  app->add_option("--cutoff-hz", obs.filter.cutoff_hz, "low-pass cut-off of every signal (Hz)")->capture_default_str();
+  app->add_option("--filter-order", obs.filter.order, "Butterworth order")->capture_default_str();
+  app->add_option("--row-rate-hz", obs.row_rate_hz, "rate of the IDIM rows (Hz; 0: five times the cut-off)")
+      ->capture_default_str();
+  app->add_option("--edge-trim-s", obs.edge_trim_s, "seconds left out at each end of a flight")->capture_default_str();
+  app->add_option("--r-sigma", tls.r_sigma, "paper method: essential parameters until max/min %sigma < r_sigma")
+      ->capture_default_str();
+  app->add_option("--max-rel-std", tls.max_rel_std_pct,
+                  "noise-aware method: drop parameters whose %sigma exceeds this")->capture_default_str();
+  app->add_flag("!--all-parameters", tls.select_essential, "keep every parameter (no essential selection)");
+  app->add_flag("!--no-component-weighting", tls.weight_by_component, "paper method: no weighting by wrench component");
+  app->add_option("--fix-zero", o->fixed_zero, "hold this parameter at 0 (repeatable), e.g. A.I_xy");
+  app->add_flag("--allow-partial", o->identify.allow_partial,
+                "accept a result in which roll or pitch inertia is not identifiable");
+  app->add_option("--rotor-signal", o->rotor_signal, "auto, rpm or command (logs that have both)")->capture_default_str();
+  app->add_option("--column-map", o->column_map, "column map (YAML) for CSV exports of other tools");
+}
+
+IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* o) {
+  o->identify.tls.method = ParseTlsMethod(o->method);
+  if (o->source != "imu" && o->source != "mocap") throw Error("--source must be imu or mocap, got '" + o->source + "'");
+  o->identify.observation.source = o->source == "imu" ? DataSource::kImu : DataSource::kMocap;
+  o->identify.tls.fixed_zero = o->fixed_zero;
+  if (const std::string problem = o->identify.Validate(); !problem.empty()) throw Error(problem);
+  return o->identify;
+}
+
+FlightSourceOptions SourceOptions(const IdentifyCliOptions& o) {
+  FlightSourceOptions source;
+  source.rotor_signal = o.rotor_signal;
+  source.column_map_path = o.column_map;
+  if (const std::string problem = source.Validate(); !problem.empty()) throw Error(problem);
+  return source;
+}
+
+std::vector<FlightData> LoadFlights(const std::vector<std::string>& vehicle_paths,
+                                    const std::vector<std::string>& log_paths, const std::vector<double>& weights,
+                                    const FlightSourceOptions& source) {
   if (vehicle_paths.size() != log_paths.size())
     throw Error("got " + std::to_string(vehicle_paths.size()) + " vehicle files and " +
                 std::to_string(log_paths.size()) + " logs; give them in pairs");
   if (!weights.empty() && weights.size() != log_paths.size())
     throw Error("got " + std::to_string(weights.size()) + " --weight values for " + std::to_string(log_paths.size()) +
                 " flights; give one per flight or none");
-  std::vector<Flight> flights;
+  std::vector<FlightData> flights;
   for (size_t i = 0; i < log_paths.size(); ++i) {
-    Flight flight;
+    FlightData flight;
     flight.vehicle = ReadVehicleYaml(vehicle_paths[i]);
-    flight.log = LoadFlightLog(log_paths[i], flight.vehicle);
+    flight.log = LoadFlightLog(log_paths[i], flight.vehicle, source);
     flight.weight = weights.empty() ? 1.0 : weights[i];
     if (!(flight.weight > 0.0)) throw Error("--weight must be positive, got " + std::to_string(flight.weight));
     flights.push_back(std::move(flight));
@@ -46,12 +92,38 @@ std::vector<Flight> LoadFlights(const std::vector<std::string>& vehicle_paths, c
   return flights;
 }
 
-std::vector<Flight> LoadTrainingFlights(const FlightOptions& options) {
-  return LoadFlights(options.vehicle_paths, options.log_paths, options.weights);
+std::vector<FlightData> LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source) {
+  return LoadFlights(options.vehicle_paths, options.log_paths, options.weights, source);
 }
 
-std::vector<Flight> LoadValidationFlights(const FlightOptions& options) {
-  return LoadFlights(options.validate_vehicle_paths, options.validate_log_paths, {});
+std::vector<FlightData> LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source) {
+  return LoadFlights(options.validate_vehicle_paths, options.validate_log_paths, {}, source);
+}
+
+std::string FormatComponents(const std::vector<std::optional<double>>& values) {
+  std::ostringstream out;
+  for (size_t j = 0; j < values.size(); ++j) {
+    if (!values[j]) continue;
+    out << (out.tellp() > 0 ? "  " : "") << kWrenchComponentNames[j] << " " << std::fixed << std::setprecision(2)
+        << *values[j] << " %";
+  }
+  return out.str();
+}
+
+void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution) {
+  out << std::left << std::setw(12) << "parameter" << std::right << std::setw(14) << "value" << std::setw(12) << "std"
+      << std::setw(10) << "%sigma" << "  essential\n";
+  for (size_t k = 0; k < names.size(); ++k) {
+    out << std::left << std::setw(12) << names[k] << std::right << std::scientific << std::setprecision(4)
+        << std::setw(14) << solution.chi[k] << std::setprecision(2) << std::setw(12) << solution.std[k] << std::fixed
+        << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[k] << "  "
+        << (solution.essential[k] ? "yes" : "no (discarded)") << "\n";
+  }
+  out.unsetf(std::ios::floatfield);
+}
+
+void PrintWarnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::cerr << "rotorid: warning: " << w << "\n";
 }
 
 }  // namespace rotorid::cli

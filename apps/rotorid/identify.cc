@@ -1,15 +1,45 @@
-#include "commands.h"
+#include <iostream>
+#include <memory>
 
-#include "rotorid/core/error.h"
+#include "commands.h"
+#include "rotorid/report/json.h"
 
 namespace rotorid::cli {
 
-// Placeholder until the identify issue lands: registers the subcommand and refuses to run.
 Command AddIdentifyCommand(CLI::App& root) {
+  struct Options {
+    FlightOptions flights;
+    IdentifyCliOptions identify;
+  };
+  auto options = std::make_shared<Options>();
   Command command;
-  command.app = root.add_subcommand("identify", "identify (not yet available)");
-  command.app->allow_extras();
-  command.run = [] () -> int { throw Error("'identify' is not available in this build yet"); };
+  command.app = root.add_subcommand(
+      "identify", "the paper's IDIM-TLS: parameters with statistics, essential parameters, weighted and "
+                  "multi-configuration TLS (repeat --vehicle/--log for configurations A and B)");
+  AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
+  AddIdentifyOptions(command.app, &options->identify);
+  command.run = [options]() {
+    const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
+    const std::vector<FlightData> flights = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
+    const IdentificationResult result = Identify(flights, identify);
+    if (!options->flights.json_path.empty()) {
+      nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                               {"command", "identify"},
+                               {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
+                                             {"tls", TlsOptionsJson(identify.tls)}}},
+                               {"linear", LinearJson(result)}};
+      WriteJsonFile(options->flights.json_path, report);
+    }
+    if (!options->flights.quiet) {
+      std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "
+                << DataSourceName(identify.observation.source) << " data, " << flights.size() << " flight(s), "
+                << result.system.w.rows() << " equations\n";
+      PrintParameterTable(std::cout, result.system.parameter_names, result.solution);
+      std::cout << "relative error (paper Table III): " << FormatComponents(result.relative_error_pct) << "\n";
+      PrintWarnings(result.warnings);
+    }
+    return 0;
+  };
   return command;
 }
 

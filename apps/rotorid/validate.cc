@@ -1,15 +1,70 @@
-#include "commands.h"
+#include <iostream>
+#include <memory>
 
-#include "rotorid/core/error.h"
+#include "commands.h"
+#include "rotorid/report/json.h"
 
 namespace rotorid::cli {
 
-// Placeholder until the validate issue lands: registers the subcommand and refuses to run.
 Command AddValidateCommand(CLI::App& root) {
+  struct Options {
+    FlightOptions flights;
+    std::string params_path;
+    std::string block;
+    std::string rotor_signal = "auto";
+    std::string column_map;
+  };
+  auto options = std::make_shared<Options>();
   Command command;
-  command.app = root.add_subcommand("validate", "validate (not yet available)");
-  command.app->allow_extras();
-  command.run = [] () -> int { throw Error("'validate' is not available in this build yet"); };
+  command.app = root.add_subcommand(
+      "validate", "applies saved parameters (--params, an identify or refine report) to other flights: the paper's "
+                  "cross-validation, Table III");
+  command.app->add_option("--params", options->params_path, "identify/refine JSON report")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command.app->add_option("--block", options->block, "linear or refined (default: refined when present)");
+  command.app->add_option("--rotor-signal", options->rotor_signal, "auto, rpm or command");
+  command.app->add_option("--column-map", options->column_map, "column map (YAML) for CSV exports of other tools");
+  AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
+  command.run = [options]() {
+    const nlohmann::json params = ReadJsonFile(options->params_path);
+    const std::map<std::string, double> values =
+        ParameterValuesFromReport(params, options->params_path, options->block);
+    // Rows are built exactly as in the run that produced the parameters.
+    const ObservationOptions observation =
+        ObservationOptionsFromJson(params.contains("settings") && params["settings"].contains("observation")
+                                       ? params["settings"]["observation"]
+                                       : nlohmann::json());
+    FlightSourceOptions source;
+    source.rotor_signal = options->rotor_signal;
+    source.column_map_path = options->column_map;
+    const std::vector<ProcessedFlight> flights =
+        ProcessFlights(LoadTrainingFlights(options->flights, source), observation);
+    const auto combined = CombinedRelativeErrorPct(flights, values);
+    nlohmann::json per_flight = nlohmann::json::array();
+    std::vector<FlightFit> fits;
+    for (const ProcessedFlight& f : flights) {
+      fits.push_back(FitFlight(f, values));
+      per_flight.push_back(FlightFitJson(fits.back()));
+    }
+    if (!options->flights.json_path.empty()) {
+      WriteJsonFile(options->flights.json_path, {{"rotorid_version", kRotoridVersion},
+                                                 {"command", "validate"},
+                                                 {"params", options->params_path},
+                                                 {"settings", {{"observation", ObservationOptionsJson(observation)}}},
+                                                 {"relative_error_pct", ComponentsJson(combined)},
+                                                 {"flights", per_flight}});
+    }
+    if (!options->flights.quiet) {
+      std::cout << "rotorid validate: parameters of " << options->params_path << " on " << flights.size()
+                << " flight(s)\n";
+      for (const FlightFit& fit : fits)
+        std::cout << "  " << fit.source << " (" << fit.config << "): " << FormatComponents(fit.relative_error_pct)
+                  << "\n";
+      std::cout << "relative error (paper Table III): " << FormatComponents(combined) << "\n";
+    }
+    return 0;
+  };
   return command;
 }
 

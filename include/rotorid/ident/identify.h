@@ -1,0 +1,86 @@
+#pragma once
+
+// The identification pipeline: flights -> processed signals -> IDIM system -> TLS, with the
+// checks a user needs (excitation, scale, systematic force errors) and the paper's Table III.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rotorid/core/flight_log.h"
+#include "rotorid/core/vehicle.h"
+#include "rotorid/ident/observation.h"
+#include "rotorid/ident/tls.h"
+
+namespace rotorid {
+
+// One flight with its vehicle and its weight in a multi-configuration identification.
+struct FlightData {
+  Vehicle vehicle;
+  FlightLog log;
+  double weight = 1.0;
+};
+
+struct IdentifyOptions {
+  ObservationOptions observation;
+  TlsOptions tls;
+  // Accept results in which a configuration's I_xx or I_yy is not identifiable.
+  bool allow_partial = false;
+
+  std::string Validate() const;
+};
+
+// How much a flight excites what the identification needs.
+struct Excitation {
+  Eigen::Vector3d angular_acceleration_rms = Eigen::Vector3d::Zero();  // rad/s^2, of w'
+  Eigen::Vector3d angular_velocity_rms = Eigen::Vector3d::Zero();      // rad/s
+  double thrust_variation_pct = 0.0;  // std / mean of sum Omega^2
+};
+
+struct FlightFit {
+  std::string source;
+  std::string config;
+  double weight = 1.0;
+  int samples = 0;
+  int row_samples = 0;
+  double duration_s = 0.0;
+  Excitation excitation;
+  std::vector<std::optional<double>> relative_error_pct;  // per component
+  Eigen::Vector3d mean_force_residual_n = Eigen::Vector3d::Zero();  // Fx, Fy, Fz
+};
+
+struct IdentificationResult {
+  std::vector<ProcessedFlight> flights;
+  IdimSystem system;
+  TlsSolution solution;
+  std::vector<std::optional<double>> relative_error_pct;  // all flights together
+  std::vector<FlightFit> per_flight;
+  std::vector<std::string> warnings;
+
+  // chi_t = [chi; 1] of the solution.
+  Eigen::VectorXd ChiT() const;
+};
+
+std::vector<ProcessedFlight> ProcessFlights(const std::vector<FlightData>& flights, const ObservationOptions& options);
+Excitation MeasureExcitation(const ProcessedFlight& flight);
+
+// Throws rotorid::Error when the result is not usable (scale lost, kt not identifiable, or a
+// configuration's roll/pitch inertia not identifiable without allow_partial), with a message that
+// names what and where.
+IdentificationResult Identify(const std::vector<FlightData>& flights, const IdentifyOptions& options);
+IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options);
+
+// Per-flight fit (Table III per flight, mean force residuals) of parameters on processed flights.
+// `parameters` maps names ("kt", "kd", "<config>.<name>") to values; missing body parameters of a
+// flight's configuration are an error.
+FlightFit FitFlight(const ProcessedFlight& flight, const std::map<std::string, double>& parameters);
+
+// Table III over several flights together.
+std::vector<std::optional<double>> CombinedRelativeErrorPct(const std::vector<ProcessedFlight>& flights,
+                                                            const std::map<std::string, double>& parameters);
+
+// The 12-entry chi_t of one flight's configuration from named parameters.
+Eigen::VectorXd FlightChiT(const Vehicle& vehicle, const std::map<std::string, double>& parameters);
+
+}  // namespace rotorid

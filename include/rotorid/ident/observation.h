@@ -1,0 +1,75 @@
+#pragma once
+
+// From a flight log to the rows of the IDIM (MODEL.md sections 1 and 3): resampling onto a
+// uniform time base, the same zero-phase low-pass on every signal, differentiation, the choice
+// of the samples that become rows, and the noise levels the default TLS needs.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rotorid/core/flight_log.h"
+#include "rotorid/core/vehicle.h"
+#include "rotorid/signal/butterworth.h"
+
+namespace rotorid {
+
+enum class DataSource { kImu, kMocap };
+const char* DataSourceName(DataSource source);
+
+struct ObservationOptions {
+  // IMU: gyro and accelerometer. MOCAP: pose differentiated twice (MODEL.md section 3).
+  DataSource source = DataSource::kImu;
+  // Zero-phase low-pass applied to every signal (gyro, accelerometer, pose, rotor signal) before
+  // differentiation and row selection, so that no column of W_t is delayed against another.
+  ButterworthOptions filter = {4, FilterBand::kLowPass, 10.0, 0.0};
+  // Rate of the rows (Hz): the filtered signals are decimated to about this rate so that
+  // neighbouring rows carry nearly independent noise. 0: five times the cut-off.
+  double row_rate_hz = 0.0;
+  // Seconds left out at both ends, where filter transients and shifted rotor signals live.
+  double edge_trim_s = 0.5;
+
+  std::string Validate() const;
+};
+
+// White-noise standard deviations of the filtered signals that enter the regressor, per axis.
+struct SignalNoise {
+  Eigen::Vector3d specific_force = Eigen::Vector3d::Zero();     // m/s^2
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();   // rad/s
+  Eigen::Vector3d angular_acceleration = Eigen::Vector3d::Zero();  // rad/s^2
+};
+
+// One flight after signal processing, at the uniform base rate. Rows of the IDIM are taken at
+// `row_samples`. The refinement re-builds rows from these arrays with effects applied.
+struct ProcessedFlight {
+  std::string source;
+  Vehicle vehicle;
+  double weight = 1.0;
+  double dt_s = 0.0;
+  Eigen::VectorXd t_s;                 // uniform base time
+  Eigen::MatrixX3d specific_force;     // s, IMU (or body) frame, filtered
+  Eigen::MatrixX3d angular_velocity;   // w, filtered
+  Eigen::MatrixX3d angular_acceleration;  // w', derivative of the filtered w
+  Eigen::MatrixXd rotor;               // filtered rotor signal |Omega_i|
+  std::vector<int> row_samples;        // indices of the samples that become rows
+  SignalNoise noise;                   // of the filtered signals at the base rate
+  double gravity_mps2 = kStandardGravity;
+
+  int num_rows_samples() const { return static_cast<int>(row_samples.size()); }
+};
+
+ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,
+                              const ObservationOptions& options);
+
+// The IDIM rows of one flight: 6 rows per row sample (sample-major, components Fx Fy Fz Mx My Mz),
+// columns [kt kd chi(9) m] as IdimRows.
+Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight);
+
+// Per wrench component (6), the sum over the flight's rows of the covariance of the errors of the
+// row entries (12x12, columns as BuildIdimMatrix) caused by the white noise of the signals. The
+// regressor is at most quadratic in the signals, so its Jacobian is taken exactly by central
+// differences.
+std::vector<Eigen::MatrixXd> IdimNoiseCovariance(const ProcessedFlight& flight);
+
+}  // namespace rotorid

@@ -1,0 +1,112 @@
+#pragma once
+
+// Total least squares on the IDIM (MODEL.md section 2): the paper's procedure and rotorid's
+// noise-aware default, with statistics and essential-parameter selection.
+//
+// Both are Rayleigh-quotient problems over chi_t = [chi; 1]:
+//     minimise  sum_i lambda_i (w_i . chi_t)^2 / (chi_t^T N chi_t)
+// with row weights lambda_i and a column error metric N:
+//   paper:       lambda from the per-component error spread (weighted TLS), N = identity on the raw
+//                SI columns, i.e. the criterion ||W_t chi_t||^2 / (1 + |chi|^2);
+//   noise-aware: lambda normalises every row to unit error variance, N is the covariance of the
+//                errors in the row entries caused by sensor noise (exact columns such as the
+//                commanded rotor signal get none) plus the equation error, which acts on the
+//                column whose coefficient is fixed to 1. This is the errors-in-variables maximum
+//                likelihood estimate (a generalized TLS); it is invariant to column scaling.
+// The refinement minimises the same criterion with the same lambda and N, so that with every
+// effect off it returns this solution.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rotorid/ident/observation.h"
+
+namespace rotorid {
+
+// W_t of one or several flights. Flights of the same vehicle name share that configuration's
+// chi; kt and kd are shared by all. Columns: [kt kd chi_config1 ... chi_configC | mass column].
+struct IdimSystem {
+  Eigen::MatrixXd w;
+  std::vector<std::string> parameter_names;  // one per column but the last
+  std::vector<std::string> config_names;
+  // Per row: its group (wrench component + 6 * flight) and its sample number within the flight
+  // (the 6 rows of one sample share it), for weighting and autocorrelation-robust statistics.
+  std::vector<int> row_group;
+  std::vector<int> row_sample;
+  std::vector<double> flight_weight;
+  std::vector<int> flight_config;              // configuration index per flight
+  std::vector<std::string> flight_source;
+  std::vector<Eigen::MatrixXd> group_noise_cov;  // per group, sum over its rows (columns as w)
+
+  int num_parameters() const { return static_cast<int>(parameter_names.size()); }
+  int num_flights() const { return static_cast<int>(flight_weight.size()); }
+  int num_groups() const { return 6 * num_flights(); }
+  static int Component(int group) { return group % 6; }
+  static int Flight(int group) { return group / 6; }
+  // Column of the first body parameter of configuration c.
+  static int ConfigColumn(int c) { return 2 + 9 * c; }
+};
+
+IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights);
+
+enum class TlsMethod { kPaper, kNoiseAware };
+const char* TlsMethodName(TlsMethod method);
+TlsMethod ParseTlsMethod(const std::string& name);
+
+struct TlsOptions {
+  TlsMethod method = TlsMethod::kNoiseAware;
+  // Paper III-B: weight rows by the inverse spread of their component's equation error.
+  bool weight_by_component = true;
+  // Essential parameters. Paper: drop the worst %sigma until max/min %sigma < r_sigma.
+  bool select_essential = true;
+  double r_sigma = 250.0;
+  // Noise-aware: drop the worst parameter while its %sigma exceeds this (a parameter is kept when
+  // it is known to better than this, whatever the others' precision).
+  double max_rel_std_pct = 10.0;
+  // Fixed-point iterations of the noise-aware weights.
+  int max_iterations = 30;
+  // Parameters (by name) never dropped and never estimated: held at 0 ("discard").
+  std::vector<std::string> fixed_zero;
+
+  std::string Validate() const;
+};
+
+struct DiscardedParameter {
+  std::string name;
+  double value = 0.0;             // estimate, std and %sigma at the moment it was dropped
+  double std = 0.0;
+  double rel_std_pct = 0.0;
+  std::string most_correlated;    // the free parameter it was most correlated with
+  double correlation = 0.0;
+};
+
+struct TlsSolution {
+  TlsMethod method = TlsMethod::kNoiseAware;
+  Eigen::VectorXd chi;            // all parameters; discarded ones are 0
+  std::vector<bool> essential;
+  Eigen::MatrixXd covariance;     // all parameters; rows/cols of discarded ones are 0
+  Eigen::VectorXd std;
+  Eigen::VectorXd rel_std_pct;
+  std::vector<DiscardedParameter> discarded;
+  // The criterion actually minimised (for the refinement): row weights and column metric.
+  Eigen::VectorXd row_weight;     // lambda_i
+  Eigen::MatrixXd column_metric;  // N, (p+1)x(p+1)
+  double sigma_w = 0.0;           // paper eq. 19 (paper) or the RMS whitened residual (noise-aware)
+  Eigen::VectorXd singular_values;  // of the final weighted (and, noise-aware, whitened) system
+  double scale_entry = 1.0;       // |last entry| of the unit solution vector in equilibrated columns
+  int iterations = 0;
+  bool usable = true;
+  std::string message;            // why it is not usable
+  std::vector<std::string> warnings;
+};
+
+TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
+
+// Table III of the paper: per wrench component, ||rho_j|| / ||W_k chi_k (j)|| in %, over the
+// given rows (raw SI, unweighted); nullopt when the denominator is zero.
+std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t);
+
+}  // namespace rotorid

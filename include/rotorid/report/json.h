@@ -1,0 +1,41 @@
+#pragma once
+
+// Machine-readable reports (INTERFACE.md section 5). Key names there are fixed; everything else
+// is documented in docs/report_format.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rotorid/ident/identify.h"
+
+namespace rotorid {
+
+inline constexpr const char* kRotoridVersion = "0.1.0";
+
+// {"value", "std", "rel_std_pct", "essential"} for every parameter of a solution; discarded
+// parameters have value 0 (as used by the model) and keep their estimate at the moment they were
+// dropped under "estimate_when_discarded".
+nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution);
+// {"Fx": null, "Fy": null, "Fz": 3.2, ...}
+nlohmann::json ComponentsJson(const std::vector<std::optional<double>>& values);
+nlohmann::json VectorJson(const Eigen::VectorXd& v);
+nlohmann::json ObservationOptionsJson(const ObservationOptions& options);
+nlohmann::json TlsOptionsJson(const TlsOptions& options);
+ObservationOptions ObservationOptionsFromJson(const nlohmann::json& j);
+nlohmann::json FlightFitJson(const FlightFit& fit);
+// The "linear" block of identify and refine reports.
+nlohmann::json LinearJson(const IdentificationResult& result);
+
+// Parameter values by name from a report's "<block>.parameters" (refined when present, else
+// linear, unless `block` names one). Throws rotorid::Error naming the file on a malformed report.
+std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
+                                                        const std::string& block = "");
+
+nlohmann::json ReadJsonFile(const std::string& path);
+// Pretty JSON, written atomically.
+void WriteJsonFile(const std::string& path, const nlohmann::json& j);
+
+}  // namespace rotorid

@@ -1,0 +1,164 @@
+#include "rotorid/ident/observation.h"
+
+#include <cmath>
+
+#include "rotorid/core/error.h"
+#include "rotorid/model/rigid_body.h"
+#include "rotorid/model/rotation.h"
+#include "rotorid/signal/differentiate.h"
+#include "rotorid/signal/resample.h"
+
+namespace rotorid {
+
+const char* DataSourceName(DataSource source) { return source == DataSource::kImu ? "imu" : "mocap"; }
+
+std::string ObservationOptions::Validate() const {
+  if (filter.band != FilterBand::kLowPass) return "the observation filter must be a low-pass";
+  if (filter.order < 1 || filter.order > 12) return "filter order must be in 1..12";
+  if (!(filter.cutoff_hz > 0.0)) return "filter cut-off must be positive (Hz)";
+  if (row_rate_hz < 0.0) return "row rate must be positive (Hz) or 0 for automatic";
+  if (!(edge_trim_s >= 0.0)) return "edge trim must not be negative (s)";
+  return {};
+}
+
+namespace {
+
+// Variance gain of white noise through filtfilt (|H|^2 applied twice) and, optionally, a
+// central difference (|sin(w dt)/dt|^2 per application): (2/fs) * integral over [0, fs/2].
+double NoiseVarianceGain(const SosFilter& filter, double fs, int differentiations) {
+  const int steps = 4000;
+  const double nyquist = 0.5 * fs, dt = 1.0 / fs;
+  double integral = 0.0;
+  for (int k = 0; k <= steps; ++k) {
+    const double f = nyquist * k / steps;
+    const double h = filter.Gain(f, fs);
+    double value = h * h * h * h;
+    const double d = std::sin(2.0 * M_PI * f * dt) / dt;
+    for (int i = 0; i < differentiations; ++i) value *= d * d;
+    integral += (k == 0 || k == steps ? 0.5 : 1.0) * value;
+  }
+  return integral * (nyquist / steps) / nyquist;
+}
+
+Eigen::Vector3d ColumnNoise(const Eigen::MatrixXd& x) {
+  Eigen::Vector3d sigma;
+  for (int a = 0; a < 3; ++a) sigma[a] = WhiteNoiseStd(x.col(a));
+  return sigma;
+}
+
+}  // namespace
+
+ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,
+                              const ObservationOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  if (log.num_rotors() != vehicle.num_rotors())
+    throw Error(log.source + ": the log has " + std::to_string(log.num_rotors()) + " rotor columns, vehicle '" +
+                vehicle.name + "' has " + std::to_string(vehicle.num_rotors()) + " rotors");
+  if (options.source == DataSource::kMocap && !log.mocap)
+    throw Error(log.source + ": --source mocap needs pos_x,pos_y,pos_z and roll,pitch,yaw (or qw..qz) columns");
+  const double dt = log.MedianDt();
+  if (!(dt > 0.0)) throw Error(log.source + ": cannot determine the sample interval");
+  const double fs = 1.0 / dt;
+  if (const std::string problem = options.filter.Validate(fs); !problem.empty())
+    throw Error(log.source + ": " + problem + " (log sampled at " + std::to_string(fs) + " Hz)");
+
+  ProcessedFlight out;
+  out.source = log.source;
+  out.vehicle = vehicle;
+  out.weight = weight;
+  out.dt_s = dt;
+  out.gravity_mps2 = log.gravity_mps2;
+  out.t_s = UniformTimeBase(log.t_s[0], log.t_s[log.num_samples() - 1], fs);
+  const int n = static_cast<int>(out.t_s.size());
+  const int trim = static_cast<int>(std::ceil(options.edge_trim_s * fs));
+  const double row_rate = options.row_rate_hz > 0.0 ? options.row_rate_hz : 5.0 * options.filter.cutoff_hz;
+  const int step = std::max(1, static_cast<int>(std::lround(fs / row_rate)));
+  if (n - 2 * trim < 10 * step)
+    throw Error(log.source + ": too short after leaving out " + std::to_string(options.edge_trim_s) +
+                " s at each end (" + std::to_string(log.duration_s()) + " s of data)");
+
+  const SosFilter filter = DesignButterworth(options.filter, fs);
+  const double gain0 = std::sqrt(NoiseVarianceGain(filter, fs, 0));
+  const double gain1 = std::sqrt(NoiseVarianceGain(filter, fs, 1));
+  const double gain2 = std::sqrt(NoiseVarianceGain(filter, fs, 2));
+
+  out.rotor = FiltFiltColumns(filter, InterpolateLinear(log.t_s, log.rotor_radps, out.t_s));
+  if (options.source == DataSource::kImu) {
+    const Eigen::MatrixXd gyro = InterpolateLinear(log.t_s, log.gyro_radps, out.t_s);
+    const Eigen::MatrixXd acc = InterpolateLinear(log.t_s, log.acc_mps2, out.t_s);
+    out.angular_velocity = FiltFiltColumns(filter, gyro);
+    out.angular_acceleration = CentralDifference(out.angular_velocity, dt);
+    out.specific_force = FiltFiltColumns(filter, acc);
+    const Eigen::Vector3d gyro_noise = ColumnNoise(gyro), acc_noise = ColumnNoise(acc);
+    out.noise.angular_velocity = gyro_noise * gain0;
+    out.noise.angular_acceleration = gyro_noise * gain1;
+    out.noise.specific_force = acc_noise * gain0;
+  } else {
+    Eigen::MatrixXd angles = log.mocap->bryant_rad;
+    for (int a = 0; a < 3; ++a) angles.col(a) = UnwrapAngle(angles.col(a));
+    angles = InterpolateLinear(log.t_s, angles, out.t_s);
+    const Eigen::MatrixXd position = InterpolateLinear(log.t_s, log.mocap->position_w_m, out.t_s);
+    const Eigen::MatrixXd eta = FiltFiltColumns(filter, angles);
+    const Eigen::MatrixXd eta_dot = CentralDifference(eta, dt);
+    const Eigen::MatrixXd eta_ddot = CentralDifference(eta_dot, dt);
+    const Eigen::MatrixXd accel_w = CentralDifference(CentralDifference(FiltFiltColumns(filter, position), dt), dt);
+    out.angular_velocity.resize(n, 3);
+    out.angular_acceleration.resize(n, 3);
+    out.specific_force.resize(n, 3);
+    const Eigen::Vector3d gravity_w(0.0, 0.0, -log.gravity_mps2);
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d e = eta.row(i), ed = eta_dot.row(i), edd = eta_ddot.row(i);
+      const Eigen::Matrix3d t = BryantRateMatrix(e);
+      out.angular_velocity.row(i) = (t * ed).transpose();
+      out.angular_acceleration.row(i) = (BryantRateMatrixDerivative(e, ed) * ed + t * edd).transpose();
+      const Eigen::Vector3d a = accel_w.row(i);
+      out.specific_force.row(i) = (BryantToRotation(e).transpose() * (a - gravity_w)).transpose();
+    }
+    const Eigen::Vector3d position_noise = ColumnNoise(position), angle_noise = ColumnNoise(angles);
+    out.noise.specific_force = Eigen::Vector3d::Constant(position_noise.norm() / std::sqrt(3.0) * gain2);
+    out.noise.angular_velocity = angle_noise * gain1;
+    out.noise.angular_acceleration = angle_noise * gain2;
+  }
+  for (int i = trim; i < n - trim; i += step) out.row_samples.push_back(i);
+  return out;
+}
+
+Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight) {
+  const int rows = flight.num_rows_samples();
+  Eigen::MatrixXd w(6 * rows, kNumIdimColumns);
+  for (int r = 0; r < rows; ++r) {
+    const int i = flight.row_samples[r];
+    const Eigen::Vector3d omega = flight.angular_velocity.row(i), omega_dot = flight.angular_acceleration.row(i),
+                          s = flight.specific_force.row(i);
+    w.middleRows<6>(6 * r) = IdimRows<double>(omega, omega_dot, s, flight.rotor.row(i).transpose(), flight.vehicle);
+  }
+  return w;
+}
+
+std::vector<Eigen::MatrixXd> IdimNoiseCovariance(const ProcessedFlight& flight) {
+  std::vector<Eigen::MatrixXd> cov(kNumWrenchComponents, Eigen::MatrixXd::Zero(kNumIdimColumns, kNumIdimColumns));
+  Eigen::Matrix<double, 9, 1> sigma;
+  sigma << flight.noise.angular_velocity, flight.noise.angular_acceleration, flight.noise.specific_force;
+  for (int i : flight.row_samples) {
+    Eigen::Matrix<double, 9, 1> x;
+    x << flight.angular_velocity.row(i).transpose(), flight.angular_acceleration.row(i).transpose(),
+        flight.specific_force.row(i).transpose();
+    const Eigen::VectorXd omega = flight.rotor.row(i).transpose();
+    for (int k = 0; k < 9; ++k) {
+      if (sigma[k] == 0.0) continue;
+      auto rows_at = [&](double delta) {
+        Eigen::Matrix<double, 9, 1> y = x;
+        y[k] += delta;
+        return IdimRows<double>(Eigen::Vector3d(y.segment<3>(0)), Eigen::Vector3d(y.segment<3>(3)),
+                                Eigen::Vector3d(y.segment<3>(6)), omega, flight.vehicle);
+      };
+      // Exact for the (at most quadratic) regressor.
+      const Eigen::Matrix<double, 6, kNumIdimColumns> jac = 0.5 * (rows_at(1.0) - rows_at(-1.0));
+      for (int c = 0; c < kNumWrenchComponents; ++c)
+        cov[c].noalias() += sigma[k] * sigma[k] * jac.row(c).transpose() * jac.row(c);
+    }
+  }
+  return cov;
+}
+
+}  // namespace rotorid

@@ -1,0 +1,425 @@
+#include "rotorid/ident/tls.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <Eigen/Dense>
+
+#include "rotorid/core/error.h"
+#include "rotorid/model/parameters.h"
+#include "rotorid/model/rigid_body.h"
+
+namespace rotorid {
+
+const char* TlsMethodName(TlsMethod method) { return method == TlsMethod::kPaper ? "paper" : "noise-aware"; }
+
+TlsMethod ParseTlsMethod(const std::string& name) {
+  if (name == "paper") return TlsMethod::kPaper;
+  if (name == "noise-aware" || name == "default") return TlsMethod::kNoiseAware;
+  throw Error("unknown method '" + name + "'; use 'noise-aware' (default) or 'paper'");
+}
+
+std::string TlsOptions::Validate() const {
+  if (!(r_sigma > 1.0)) return "r_sigma must be greater than 1";
+  if (!(max_rel_std_pct > 0.0)) return "the %sigma limit for essential parameters must be positive";
+  if (max_iterations < 1) return "max_iterations must be at least 1";
+  return {};
+}
+
+IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
+  if (flights.empty()) throw Error("no flights to identify from");
+  IdimSystem system;
+  std::map<std::string, int> config_index;
+  std::map<std::string, const Vehicle*> config_vehicle;
+  for (const ProcessedFlight& f : flights) {
+    auto [it, inserted] = config_index.emplace(f.vehicle.name, static_cast<int>(system.config_names.size()));
+    if (inserted) {
+      system.config_names.push_back(f.vehicle.name);
+      config_vehicle[f.vehicle.name] = &f.vehicle;
+    } else if (config_vehicle[f.vehicle.name]->mass_kg != f.vehicle.mass_kg) {
+      throw Error("vehicle name '" + f.vehicle.name +
+                  "' is used with two different masses; give each configuration its own name");
+    }
+    system.flight_config.push_back(it->second);
+    system.flight_weight.push_back(f.weight);
+    system.flight_source.push_back(f.source);
+  }
+  system.parameter_names = ParameterNames(system.config_names);
+  const int p = system.num_parameters();
+  int total_rows = 0;
+  for (const ProcessedFlight& f : flights) total_rows += 6 * f.num_rows_samples();
+  system.w = Eigen::MatrixXd::Zero(total_rows, p + 1);
+  system.row_group.reserve(total_rows);
+  system.row_sample.reserve(total_rows);
+  // Column map from a single flight's 12 columns to the system's.
+  auto column_of = [&](int c, int k) {
+    if (k < kNumRotorCoefficients) return k;
+    if (k < kNumRotorCoefficients + kNumBodyParameters) return IdimSystem::ConfigColumn(c) + k - kNumRotorCoefficients;
+    return p;
+  };
+  int row = 0;
+  for (int f = 0; f < static_cast<int>(flights.size()); ++f) {
+    const int c = system.flight_config[f];
+    const Eigen::MatrixXd wf = BuildIdimMatrix(flights[f]);
+    for (int k = 0; k < kNumIdimColumns; ++k) system.w.block(row, column_of(c, k), wf.rows(), 1) = wf.col(k);
+    for (int i = 0; i < wf.rows(); ++i) {
+      system.row_group.push_back(6 * f + i % 6);
+      system.row_sample.push_back(i / 6);
+    }
+    row += static_cast<int>(wf.rows());
+    for (const Eigen::MatrixXd& cov : IdimNoiseCovariance(flights[f])) {
+      Eigen::MatrixXd mapped = Eigen::MatrixXd::Zero(p + 1, p + 1);
+      for (int a = 0; a < kNumIdimColumns; ++a)
+        for (int b = 0; b < kNumIdimColumns; ++b) mapped(column_of(c, a), column_of(c, b)) += cov(a, b);
+      system.group_noise_cov.push_back(mapped);
+    }
+  }
+  return system;
+}
+
+std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t) {
+  std::vector<double> residual_sq(6, 0.0), rotor_sq(6, 0.0);
+  for (Eigen::Index i = 0; i < w.rows(); ++i) {
+    const double rho = w.row(i).dot(chi_t);
+    const double rotor = w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1];
+    residual_sq[i % 6] += rho * rho;
+    rotor_sq[i % 6] += rotor * rotor;
+  }
+  std::vector<std::optional<double>> out(6);
+  for (int j = 0; j < 6; ++j)
+    if (rotor_sq[j] > 0.0) out[j] = 100.0 * std::sqrt(residual_sq[j] / rotor_sq[j]);
+  return out;
+}
+
+namespace {
+
+// Result of one solve on a fixed set of free columns.
+struct CoreSolve {
+  Eigen::VectorXd chi_t;       // over `columns` (free parameters then the last column), last = 1
+  Eigen::MatrixXd covariance;  // over the free parameters
+  Eigen::VectorXd row_weight;
+  Eigen::MatrixXd metric;      // over `columns`
+  Eigen::VectorXd singular_values;
+  double sigma_w = 0.0;
+  double scale_entry = 1.0;
+  int iterations = 0;
+};
+
+Eigen::MatrixXd SelectColumns(const Eigen::MatrixXd& w, const std::vector<int>& columns) {
+  Eigen::MatrixXd out(w.rows(), columns.size());
+  for (size_t k = 0; k < columns.size(); ++k) out.col(k) = w.col(columns[k]);
+  return out;
+}
+
+Eigen::MatrixXd SelectBlock(const Eigen::MatrixXd& m, const std::vector<int>& columns) {
+  Eigen::MatrixXd out(columns.size(), columns.size());
+  for (size_t a = 0; a < columns.size(); ++a)
+    for (size_t b = 0; b < columns.size(); ++b) out(a, b) = m(columns[a], columns[b]);
+  return out;
+}
+
+// Triangular factor R of the row-weighted matrix (R^T R = A^T diag(weight) A), by Householder QR
+// of blocks so that memory stays O(rows x columns) once.
+Eigen::MatrixXd WeightedR(const Eigen::MatrixXd& a, const Eigen::VectorXd& weight) {
+  Eigen::MatrixXd scaled = weight.cwiseSqrt().asDiagonal() * a;
+  Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(scaled);
+  const int n = static_cast<int>(a.cols());
+  return qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+}
+
+// Smallest generalized eigenvector of (R^T R, metric): minimises |R x|^2 / (x^T metric x); scaled so
+// that its last entry is 1. `scale_entry` measures how well the last entry is determined.
+Eigen::VectorXd GeneralizedTls(const Eigen::MatrixXd& r, const Eigen::MatrixXd& metric, double* scale_entry,
+                               Eigen::VectorXd* singular_values) {
+  const int n = static_cast<int>(r.cols());
+  // Equilibrate columns so that the conditioning of R does not depend on units.
+  const Eigen::VectorXd norms = r.colwise().norm().transpose().cwiseMax(1e-300);
+  const Eigen::MatrixXd r_eq = r * norms.cwiseInverse().asDiagonal();
+  Eigen::MatrixXd metric_eq = norms.cwiseInverse().asDiagonal() * metric * norms.cwiseInverse().asDiagonal();
+  // A vanishing metric (noise-free data) falls back to TLS on equilibrated columns.
+  metric_eq += 1e-9 * std::max(metric_eq.trace() / n, 1.0) * Eigen::MatrixXd::Identity(n, n) +
+               1e-12 * Eigen::MatrixXd::Identity(n, n);
+  // x^T R^T R x / x^T G x with G = L L^T: y = L^T x, minimise |R L^-T y|^2 / |y|^2 -> SVD.
+  const Eigen::LLT<Eigen::MatrixXd> llt(metric_eq);
+  const Eigen::MatrixXd l = llt.matrixL();
+  const Eigen::MatrixXd b = l.triangularView<Eigen::Lower>().solve(r_eq.transpose()).transpose();  // R L^-T
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(b, Eigen::ComputeFullV);
+  if (singular_values) *singular_values = svd.singularValues();
+  const Eigen::VectorXd y = svd.matrixV().col(n - 1);
+  Eigen::VectorXd x_eq = l.transpose().triangularView<Eigen::Upper>().solve(y);
+  x_eq.normalize();
+  *scale_entry = std::abs(x_eq[n - 1]);
+  Eigen::VectorXd x = norms.cwiseInverse().asDiagonal() * x_eq;
+  return x / x[n - 1];
+}
+
+std::vector<int> ComponentCounts(const IdimSystem& system) {
+  std::vector<int> counts(system.num_groups(), 0);
+  for (int g : system.row_group) ++counts[g];
+  return counts;
+}
+
+// The paper: TLS by SVD, weighted by component, statistics of eq. (18)-(22).
+CoreSolve SolvePaper(const IdimSystem& system, const std::vector<int>& columns, const TlsOptions& options) {
+  const Eigen::MatrixXd a = SelectColumns(system.w, columns);
+  const int rows = static_cast<int>(a.rows()), n = static_cast<int>(columns.size());
+  Eigen::VectorXd weight(rows);
+  for (int i = 0; i < rows; ++i) weight[i] = std::pow(system.flight_weight[IdimSystem::Flight(system.row_group[i])], 2);
+  CoreSolve out;
+  auto solve = [&]() {
+    const Eigen::MatrixXd r = WeightedR(a, weight);
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::VectorXd v = svd.matrixV().col(n - 1);
+    out.scale_entry = std::abs(v[n - 1]);
+    out.chi_t = v / v[n - 1];
+    out.singular_values = svd.singularValues();
+    return std::make_pair(r, svd);
+  };
+  auto [r, svd] = solve();
+  out.iterations = 1;
+  if (options.weight_by_component) {
+    const Eigen::VectorXd rho = a * out.chi_t;
+    std::vector<double> sum_sq(system.num_groups(), 0.0);
+    const std::vector<int> counts = ComponentCounts(system);
+    for (int i = 0; i < rows; ++i) sum_sq[system.row_group[i]] += rho[i] * rho[i];
+    for (int i = 0; i < rows; ++i) {
+      const int g = system.row_group[i];
+      const double sigma = std::sqrt(sum_sq[g] / std::max(1, counts[g] - 1));
+      // Fx and Fy rows carry no rotor term; a group with no error at all keeps its weight.
+      if (sigma > 0.0) weight[i] /= sigma * sigma;
+    }
+    std::tie(r, svd) = solve();
+    out.iterations = 2;
+  }
+  // Statistics (eq. 19-21): sigma_W, and the covariance from the nearest rank-deficient matrix.
+  const double s_min = svd.singularValues()[n - 1];
+  out.sigma_w = s_min / std::sqrt(std::max(1, rows - n));
+  const Eigen::MatrixXd r_bar = r - s_min * svd.matrixU().col(n - 1) * svd.matrixV().col(n - 1).transpose();
+  const Eigen::MatrixXd w_bar = r_bar.leftCols(n - 1);
+  const double chi_sq = out.chi_t.head(n - 1).squaredNorm();
+  out.covariance = out.sigma_w * out.sigma_w * (1.0 + chi_sq) *
+                   (w_bar.transpose() * w_bar).ldlt().solve(Eigen::MatrixXd::Identity(n - 1, n - 1));
+  out.row_weight = weight;
+  out.metric = Eigen::MatrixXd::Identity(n, n);
+  return out;
+}
+
+// Newey-West (Bartlett) lag: twice the first lag at which the whitened residual's autocorrelation
+// falls below 0.1, so the covariance accounts for the filter's and the model error's memory.
+int AutocorrelationLag(const Eigen::VectorXd& r, const IdimSystem& system) {
+  int lag_max = 0;
+  for (int j = 0; j < 6; ++j) {
+    std::vector<double> series;
+    for (Eigen::Index i = j; i < r.size(); i += 6)
+      if (IdimSystem::Flight(system.row_group[i]) == 0) series.push_back(r[i]);
+    const int n = static_cast<int>(series.size());
+    if (n < 20) continue;
+    double c0 = 0.0;
+    for (double v : series) c0 += v * v;
+    if (c0 <= 0.0) continue;
+    int lag = 1;
+    for (; lag < n / 10; ++lag) {
+      double c = 0.0;
+      for (int t = 0; t + lag < n; ++t) c += series[t] * series[t + lag];
+      if (c / c0 < 0.1) break;
+    }
+    lag_max = std::max(lag_max, lag);
+  }
+  return std::max(2, 2 * lag_max);
+}
+
+// rotorid's default: errors-in-variables TLS with the noise metric, iterated to a fixed point of the
+// row weights and equation-error variances; sandwich covariance robust to autocorrelation.
+CoreSolve SolveNoiseAware(const IdimSystem& system, const std::vector<int>& columns, const TlsOptions& options) {
+  const Eigen::MatrixXd a = SelectColumns(system.w, columns);
+  const int rows = static_cast<int>(a.rows()), n = static_cast<int>(columns.size());
+  const int groups = system.num_groups();
+  const std::vector<int> counts = ComponentCounts(system);
+  std::vector<Eigen::MatrixXd> group_cov(groups);
+  for (int g = 0; g < groups; ++g) group_cov[g] = SelectBlock(system.group_noise_cov[g], columns);
+
+  CoreSolve out;
+  // Start: TLS on equilibrated columns with unit row weights.
+  Eigen::VectorXd weight = Eigen::VectorXd::Ones(rows);
+  {
+    const Eigen::MatrixXd r = WeightedR(a, weight);
+    const Eigen::VectorXd norms = r.colwise().norm().transpose().cwiseMax(1e-300);
+    out.chi_t = GeneralizedTls(r, norms.cwiseAbs2().asDiagonal(), &out.scale_entry, &out.singular_values);
+  }
+  Eigen::MatrixXd metric = Eigen::MatrixXd::Zero(n, n);
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    const Eigen::VectorXd rho = a * out.chi_t;
+    std::vector<double> sum_sq(groups, 0.0), rotor_sq(groups, 0.0);
+    for (int i = 0; i < rows; ++i) {
+      sum_sq[system.row_group[i]] += rho[i] * rho[i];
+      const double rotor = a(i, 0) * out.chi_t[0];
+      rotor_sq[system.row_group[i]] += rotor * rotor;
+    }
+    metric.setZero();
+    std::vector<double> group_weight(groups, 0.0);
+    for (int g = 0; g < groups; ++g) {
+      if (counts[g] == 0) continue;
+      const double noise_var = out.chi_t.dot(group_cov[g] * out.chi_t) / counts[g];
+      const double residual_var = sum_sq[g] / counts[g];
+      const double floor = 1e-24 * (rotor_sq[g] / counts[g]) + 1e-300;
+      const double total_var = std::max({residual_var, noise_var, floor});
+      const double equation_var = total_var - noise_var;
+      const double user = system.flight_weight[IdimSystem::Flight(g)];
+      group_weight[g] = user * user / total_var;
+      metric += group_weight[g] * group_cov[g];
+      metric(n - 1, n - 1) += group_weight[g] * counts[g] * equation_var;
+    }
+    for (int i = 0; i < rows; ++i) weight[i] = group_weight[system.row_group[i]];
+    const Eigen::MatrixXd r = WeightedR(a, weight);
+    const Eigen::VectorXd previous = out.chi_t;
+    out.chi_t = GeneralizedTls(r, metric, &out.scale_entry, &out.singular_values);
+    out.iterations = it;
+    const double change = ((out.chi_t - previous).cwiseAbs().array() /
+                           (previous.cwiseAbs().array() + 1e-300)).maxCoeff();
+    if (!(change > 1e-10)) break;
+  }
+  out.row_weight = weight;
+  out.metric = metric;
+
+  // Whitened residuals r_i = sqrt(lambda_i) (w_i . chi_t) / d, d^2 = chi_t^T N chi_t / rows, and
+  // their Jacobian over the free parameters; sandwich covariance H^-1 S H^-1 (Newey-West).
+  const double d_sq = std::max(out.chi_t.dot(metric * out.chi_t) / rows, 1e-300);
+  const double d = std::sqrt(d_sq);
+  const Eigen::VectorXd n_chi = (metric * out.chi_t).head(n - 1);
+  const Eigen::VectorXd sqrt_weight = weight.cwiseSqrt();
+  const Eigen::VectorXd resid = (sqrt_weight.asDiagonal() * (a * out.chi_t)) / d;
+  Eigen::MatrixXd jac = (sqrt_weight.asDiagonal() * a.leftCols(n - 1)) / d;
+  jac -= resid * n_chi.transpose() / (rows * d_sq);
+  out.sigma_w = std::sqrt(resid.squaredNorm() / std::max(1, rows - (n - 1)));
+  const Eigen::MatrixXd h = jac.transpose() * jac;
+  // Scores per sample (rows of one sample share their noise), per flight.
+  const int lag = AutocorrelationLag(resid, system);
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(n - 1, n - 1);
+  int begin = 0;
+  while (begin < rows) {
+    const int flight = IdimSystem::Flight(system.row_group[begin]);
+    int end = begin;
+    while (end < rows && IdimSystem::Flight(system.row_group[end]) == flight) ++end;
+    const int samples = (end - begin) / 6;
+    Eigen::MatrixXd scores(n - 1, samples);
+    for (int t = 0; t < samples; ++t)
+      scores.col(t) = jac.middleRows(begin + 6 * t, 6).transpose() * resid.segment(begin + 6 * t, 6);
+    s += scores * scores.transpose();
+    for (int l = 1; l <= lag && l < samples; ++l) {
+      const double w_l = 1.0 - static_cast<double>(l) / (lag + 1);
+      const Eigen::MatrixXd cross = scores.leftCols(samples - l) * scores.rightCols(samples - l).transpose();
+      s += w_l * (cross + cross.transpose());
+    }
+    begin = end;
+  }
+  const Eigen::MatrixXd h_inv = h.ldlt().solve(Eigen::MatrixXd::Identity(n - 1, n - 1));
+  out.covariance = h_inv * s * h_inv;
+  return out;
+}
+
+}  // namespace
+
+TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  const int p = system.num_parameters();
+  TlsSolution solution;
+  solution.method = options.method;
+  std::vector<int> free;
+  for (int k = 0; k < p; ++k) {
+    const bool fixed = std::find(options.fixed_zero.begin(), options.fixed_zero.end(), system.parameter_names[k]) !=
+                       options.fixed_zero.end();
+    if (!fixed) free.push_back(k);
+  }
+  for (const std::string& name : options.fixed_zero)
+    if (std::find(system.parameter_names.begin(), system.parameter_names.end(), name) == system.parameter_names.end())
+      throw Error("cannot fix unknown parameter '" + name + "'");
+  if (free.empty()) throw Error("every parameter is fixed; nothing to identify");
+  if (system.w.rows() <= p + 1) throw Error("too few rows (" + std::to_string(system.w.rows()) + ") for " +
+                                            std::to_string(p) + " parameters");
+
+  CoreSolve core;
+  while (true) {
+    std::vector<int> columns = free;
+    columns.push_back(p);
+    core = options.method == TlsMethod::kPaper ? SolvePaper(system, columns, options)
+                                               : SolveNoiseAware(system, columns, options);
+    const int nf = static_cast<int>(free.size());
+    Eigen::VectorXd rel(nf);
+    for (int k = 0; k < nf; ++k)
+      rel[k] = 100.0 * std::sqrt(std::max(core.covariance(k, k), 0.0)) / std::max(std::abs(core.chi_t[k]), 1e-300);
+    if (!options.select_essential || nf <= 1) break;
+    int worst = 0;
+    rel.maxCoeff(&worst);
+    const bool stop = options.method == TlsMethod::kPaper ? rel.maxCoeff() / rel.minCoeff() < options.r_sigma
+                                                          : rel.maxCoeff() <= options.max_rel_std_pct;
+    if (stop) break;
+    DiscardedParameter dropped;
+    dropped.name = system.parameter_names[free[worst]];
+    dropped.rel_std_pct = rel[worst];
+    dropped.value = core.chi_t[worst];
+    dropped.std = std::sqrt(std::max(core.covariance(worst, worst), 0.0));
+    for (int k = 0; k < nf; ++k) {
+      if (k == worst) continue;
+      const double denom = std::sqrt(core.covariance(k, k) * core.covariance(worst, worst));
+      const double corr = denom > 0.0 ? core.covariance(k, worst) / denom : 0.0;
+      if (std::abs(corr) > std::abs(dropped.correlation)) {
+        dropped.correlation = corr;
+        dropped.most_correlated = system.parameter_names[free[k]];
+      }
+    }
+    solution.discarded.push_back(dropped);
+    free.erase(free.begin() + worst);
+  }
+
+  const int nf = static_cast<int>(free.size());
+  solution.chi = Eigen::VectorXd::Zero(p);
+  solution.essential.assign(p, false);
+  solution.covariance = Eigen::MatrixXd::Zero(p, p);
+  for (int a = 0; a < nf; ++a) {
+    solution.chi[free[a]] = core.chi_t[a];
+    solution.essential[free[a]] = true;
+    for (int b = 0; b < nf; ++b) solution.covariance(free[a], free[b]) = core.covariance(a, b);
+  }
+  solution.std = solution.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  solution.rel_std_pct = Eigen::VectorXd::Zero(p);
+  for (int k = 0; k < p; ++k)
+    if (solution.chi[k] != 0.0) solution.rel_std_pct[k] = 100.0 * solution.std[k] / std::abs(solution.chi[k]);
+  // The discarded parameters keep the %sigma they had when they were dropped.
+  for (const DiscardedParameter& d : solution.discarded) {
+    const int k = static_cast<int>(std::find(system.parameter_names.begin(), system.parameter_names.end(), d.name) -
+                                   system.parameter_names.begin());
+    solution.rel_std_pct[k] = d.rel_std_pct;
+  }
+  solution.row_weight = core.row_weight;
+  solution.column_metric = Eigen::MatrixXd::Zero(p + 1, p + 1);
+  std::vector<int> columns = free;
+  columns.push_back(p);
+  for (int a = 0; a <= nf; ++a)
+    for (int b = 0; b <= nf; ++b) solution.column_metric(columns[a], columns[b]) = core.metric(a, b);
+  solution.sigma_w = core.sigma_w;
+  solution.singular_values = core.singular_values;
+  solution.scale_entry = core.scale_entry;
+  solution.iterations = core.iterations;
+
+  // Is the result usable? The scale, kt, and physical plausibility per configuration.
+  auto fail = [&](const std::string& message) {
+    solution.usable = false;
+    if (solution.message.empty()) solution.message = message;
+  };
+  if (solution.scale_entry < 1e-3) {
+    char buffer[64];
+    std::snprintf(buffer, sizeof(buffer), "%.1e", solution.scale_entry);
+    fail("scale lost: the solution vector's last entry is " + std::string(buffer) +
+         " (near 0), so these flights cannot fix the parameters' scale; typical causes are a systematic force "
+         "error (accelerometer bias, IMU misalignment) or a thrust that barely varies");
+  }
+  if (!solution.essential[0] || !(solution.chi[0] > 0.0))
+    fail("kt could not be identified (value " + std::to_string(solution.chi[0]) +
+         "); the flights do not excite the thrust enough or the scale is lost");
+  if (solution.essential[1] && !(solution.chi[1] > 0.0))
+    solution.warnings.push_back("kd came out negative: check the rotors' spin directions in the vehicle file");
+  return solution;
+}
+
+}  // namespace rotorid
