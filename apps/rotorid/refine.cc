@@ -1,15 +1,128 @@
-#include "commands.h"
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <memory>
 
+#include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/refine/refine.h"
+#include "rotorid/report/json.h"
+#include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
 
-// Placeholder until the refine issue lands: registers the subcommand and refuses to run.
+namespace {
+
+void PrintSideBySide(const IdentificationResult& linear, const RefineResult& refined) {
+  const TlsSolution& a = linear.solution;
+  const TlsSolution& b = refined.refined;
+  std::cout << std::left << std::setw(12) << "parameter" << std::right << std::setw(13) << "linear" << std::setw(10)
+            << "std" << std::setw(13) << "refined" << std::setw(10) << "std" << std::setw(10) << "change/std"
+            << "\n";
+  for (int k = 0; k < linear.system.num_parameters(); ++k) {
+    std::cout << std::left << std::setw(12) << linear.system.parameter_names[k] << std::right << std::scientific
+              << std::setprecision(4) << std::setw(13) << a.chi[k] << std::setprecision(1) << std::setw(10) << a.std[k]
+              << std::setprecision(4) << std::setw(13) << b.chi[k] << std::setprecision(1) << std::setw(10) << b.std[k];
+    if (a.essential[k] && a.std[k] > 0)
+      std::cout << std::fixed << std::setprecision(2) << std::setw(10) << (b.chi[k] - a.chi[k]) / a.std[k];
+    else
+      std::cout << std::setw(10) << "discarded";
+    std::cout << "\n";
+  }
+  std::cout.unsetf(std::ios::floatfield);
+}
+
+void PrintEffects(const RefineResult& refined) {
+  std::cout << "effects (value +- std):\n";
+  for (EffectKind kind : kAllEffectKinds) {
+    const bool on = std::find(refined.enabled.begin(), refined.enabled.end(), kind) != refined.enabled.end();
+    const Eigen::VectorXd v = refined.effects.Get(kind), s = refined.effects_std.Get(kind);
+    std::cout << "  " << std::left << std::setw(18) << EffectParameterName(kind) << std::right;
+    if (!on) {
+      std::cout << "off\n";
+      continue;
+    }
+    for (int k = 0; k < v.size(); ++k)
+      std::cout << (k ? ", " : "") << std::setprecision(4) << v[k] << " +- " << std::setprecision(2) << s[k];
+    std::cout << "\n";
+  }
+}
+
+}  // namespace
+
 Command AddRefineCommand(CLI::App& root) {
+  struct Options {
+    FlightOptions flights;
+    IdentifyCliOptions identify;
+    std::string effects = "all";
+    std::vector<std::string> initial;
+    RefineOptions refine;
+  };
+  auto options = std::make_shared<Options>();
   Command command;
-  command.app = root.add_subcommand("refine", "refine (not yet available)");
-  command.app->allow_extras();
-  command.run = [] () -> int { throw Error("'refine' is not available in this build yet"); };
+  command.app = root.add_subcommand(
+      "refine", "TLS, then a Ceres refinement of the same parameters jointly with unmodelled effects; linear and "
+                "refined results side by side");
+  AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
+  AddIdentifyOptions(command.app, &options->identify);
+  command.app->add_option("--effects", options->effects,
+                          "effects to estimate: all, none, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
+      ->capture_default_str();
+  command.app->add_option("--init", options->initial, "initial value of an effect parameter, e.g. delay_s=0.01");
+  command.app->add_option("--robust-loss", options->refine.robust_loss, "none, huber or cauchy")->capture_default_str();
+  command.app->add_option("--robust-scale", options->refine.robust_scale, "scale of the robust loss (whitened units)")
+      ->capture_default_str();
+  command.app->add_flag("!--no-delay-search", options->refine.coarse_delay_search,
+                        "start the delay at --init instead of a global search");
+  command.app->add_option("--max-iterations", options->refine.max_iterations)->capture_default_str();
+  command.app->add_option("--threads", options->refine.num_threads)->capture_default_str();
+  command.run = [options]() {
+    const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
+    RefineOptions refine = options->refine;
+    refine.effects = ParseEffectList(options->effects);
+    for (const std::string& assignment : options->initial) refine.initial.Assign(assignment);
+    if (const std::string problem = refine.Validate(); !problem.empty()) throw Error(problem);
+    const FlightSourceOptions source = SourceOptions(options->identify);
+    const IdentificationResult linear = Identify(LoadTrainingFlights(options->flights, source), identify);
+    const RefineResult refined = Refine(linear, refine);
+
+    nlohmann::json report = {
+        {"rotorid_version", kRotoridVersion},
+        {"command", "refine"},
+        {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
+                      {"tls", TlsOptionsJson(identify.tls)},
+                      {"refine", RefineOptionsJson(refine)}}},
+        {"linear", LinearJson(linear)},
+        {"refined", RefinedJson(linear, refined)}};
+    std::vector<std::optional<double>> held_out_linear, held_out_refined;
+    if (!options->flights.validate_log_paths.empty()) {
+      const std::vector<ProcessedFlight> held_out =
+          ProcessFlights(LoadValidationFlights(options->flights, source), identify.observation);
+      held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
+      held_out_refined = RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi),
+                                                  refined.effects);
+      report["held_out"] = {{"linear", {{"relative_error_pct", ComponentsJson(held_out_linear)}}},
+                            {"refined", {{"relative_error_pct", ComponentsJson(held_out_refined)}}}};
+    }
+    if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    if (!options->flights.quiet) {
+      std::cout << "rotorid refine: " << TlsMethodName(identify.tls.method) << " TLS, then Ceres with effects "
+                << (options->effects.empty() ? "none" : options->effects) << " (" << refined.solver.iterations
+                << " iterations, " << refined.solver.termination << ")\n";
+      PrintSideBySide(linear, refined);
+      PrintEffects(refined);
+      std::cout << "relative error, identification flights: linear " << FormatComponents(linear.relative_error_pct)
+                << "\n                                      refined " << FormatComponents(refined.relative_error_pct)
+                << "\n";
+      if (!held_out_linear.empty())
+        std::cout << "relative error, held-out flights:       linear " << FormatComponents(held_out_linear)
+                  << "\n                                      refined " << FormatComponents(held_out_refined) << "\n";
+      if (options->flights.verbose) std::cout << refined.solver.full_report << "\n";
+      PrintWarnings(linear.warnings);
+      PrintWarnings(refined.warnings);
+    }
+    return 0;
+  };
   return command;
 }
 

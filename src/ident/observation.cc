@@ -48,6 +48,10 @@ Eigen::Vector3d ColumnNoise(const Eigen::MatrixXd& x) {
 
 }  // namespace
 
+Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared) {
+  return FiltFiltColumns(filter, omega_squared).cwiseMax(0.0).cwiseSqrt();
+}
+
 ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,
                               const ObservationOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
@@ -82,7 +86,9 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   const double gain1 = std::sqrt(NoiseVarianceGain(filter, fs, 1));
   const double gain2 = std::sqrt(NoiseVarianceGain(filter, fs, 2));
 
-  out.rotor = FiltFiltColumns(filter, InterpolateLinear(log.t_s, log.rotor_radps, out.t_s));
+  out.filter = filter;
+  out.rotor_raw = InterpolateLinear(log.t_s, log.rotor_radps, out.t_s);
+  out.rotor = FilteredRotorSpeed(filter, out.rotor_raw.array().square().matrix());
   if (options.source == DataSource::kImu) {
     const Eigen::MatrixXd gyro = InterpolateLinear(log.t_s, log.gyro_radps, out.t_s);
     const Eigen::MatrixXd acc = InterpolateLinear(log.t_s, log.acc_mps2, out.t_s);

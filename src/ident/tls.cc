@@ -130,17 +130,21 @@ Eigen::MatrixXd WeightedR(const Eigen::MatrixXd& a, const Eigen::VectorXd& weigh
 
 // Smallest generalized eigenvector of (R^T R, metric): minimises |R x|^2 / (x^T metric x); scaled so
 // that its last entry is 1. `scale_entry` measures how well the last entry is determined.
+// `effective_metric` receives the metric actually used (with the small regularisation), so that
+// the refinement minimises exactly the same criterion.
 Eigen::VectorXd GeneralizedTls(const Eigen::MatrixXd& r, const Eigen::MatrixXd& metric, double* scale_entry,
-                               Eigen::VectorXd* singular_values) {
+                               Eigen::VectorXd* singular_values, Eigen::MatrixXd* effective_metric = nullptr) {
   const int n = static_cast<int>(r.cols());
   // Equilibrate columns so that the conditioning of R does not depend on units.
   const Eigen::VectorXd norms = r.colwise().norm().transpose().cwiseMax(1e-300);
   const Eigen::MatrixXd r_eq = r * norms.cwiseInverse().asDiagonal();
   Eigen::MatrixXd metric_eq = norms.cwiseInverse().asDiagonal() * metric * norms.cwiseInverse().asDiagonal();
   // A vanishing metric (noise-free data) falls back to TLS on equilibrated columns.
-  metric_eq += 1e-9 * std::max(metric_eq.trace() / n, 1.0) * Eigen::MatrixXd::Identity(n, n) +
-               1e-12 * Eigen::MatrixXd::Identity(n, n);
+  double mean_diagonal = 0.0;
+  for (int k = 0; k < n; ++k) mean_diagonal += metric_eq(k, k) / n;
+  for (int k = 0; k < n; ++k) metric_eq(k, k) += 1e-9 * std::max(mean_diagonal, 1.0) + 1e-12;
   // x^T R^T R x / x^T G x with G = L L^T: y = L^T x, minimise |R L^-T y|^2 / |y|^2 -> SVD.
+  if (effective_metric) *effective_metric = norms.asDiagonal() * metric_eq * norms.asDiagonal();
   const Eigen::LLT<Eigen::MatrixXd> llt(metric_eq);
   const Eigen::MatrixXd l = llt.matrixL();
   const Eigen::MatrixXd b = l.triangularView<Eigen::Lower>().solve(r_eq.transpose()).transpose();  // R L^-T
@@ -273,14 +277,14 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const std::vector<int>& colu
     for (int i = 0; i < rows; ++i) weight[i] = group_weight[system.row_group[i]];
     const Eigen::MatrixXd r = WeightedR(a, weight);
     const Eigen::VectorXd previous = out.chi_t;
-    out.chi_t = GeneralizedTls(r, metric, &out.scale_entry, &out.singular_values);
+    out.chi_t = GeneralizedTls(r, metric, &out.scale_entry, &out.singular_values, &out.metric);
     out.iterations = it;
     const double change = ((out.chi_t - previous).cwiseAbs().array() /
                            (previous.cwiseAbs().array() + 1e-300)).maxCoeff();
     if (!(change > 1e-10)) break;
   }
   out.row_weight = weight;
-  out.metric = metric;
+  metric = out.metric;
 
   // Whitened residuals r_i = sqrt(lambda_i) (w_i . chi_t) / d, d^2 = chi_t^T N chi_t / rows, and
   // their Jacobian over the free parameters; sandwich covariance H^-1 S H^-1 (Newey-West).
@@ -319,6 +323,22 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const std::vector<int>& colu
 }
 
 }  // namespace
+
+double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution) {
+  const int p = static_cast<int>(solution.chi.size());
+  std::vector<int> columns;
+  for (int k = 0; k < p; ++k)
+    if (solution.essential[k]) columns.push_back(k);
+  columns.push_back(p);
+  const Eigen::MatrixXd r = WeightedR(SelectColumns(w, columns), solution.row_weight);
+  const Eigen::MatrixXd metric = SelectBlock(solution.column_metric, columns);
+  // Rayleigh quotient minimum = smallest generalized eigenvalue; evaluate it at its minimiser.
+  double scale_entry = 0.0;
+  Eigen::MatrixXd used_metric;
+  const Eigen::VectorXd x = GeneralizedTls(r, metric, &scale_entry, nullptr, &used_metric);
+  const double denominator = x.dot(metric * x);
+  return denominator > 0.0 ? (r * x).squaredNorm() / denominator : 0.0;
+}
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);

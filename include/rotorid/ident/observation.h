@@ -51,13 +51,19 @@ struct ProcessedFlight {
   Eigen::MatrixX3d specific_force;     // s, IMU (or body) frame, filtered
   Eigen::MatrixX3d angular_velocity;   // w, filtered
   Eigen::MatrixX3d angular_acceleration;  // w', derivative of the filtered w
-  Eigen::MatrixXd rotor;               // filtered rotor signal |Omega_i|
+  Eigen::MatrixXd rotor_raw;           // rotor signal |Omega_i| on the base time, unfiltered
+  Eigen::MatrixXd rotor;               // sqrt of the filtered Omega_i^2: the rotor columns are linear in
+                                       // Omega^2, so it is Omega^2 that goes through the low-pass
+  SosFilter filter;                    // the low-pass applied to every signal
   std::vector<int> row_samples;        // indices of the samples that become rows
   SignalNoise noise;                   // of the filtered signals at the base rate
   double gravity_mps2 = kStandardGravity;
 
   int num_rows_samples() const { return static_cast<int>(row_samples.size()); }
 };
+
+// sqrt(filtfilt(Omega^2)) per column: the rotor signal that enters the rows.
+Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared);
 
 ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,
                               const ObservationOptions& options);

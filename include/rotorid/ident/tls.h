@@ -105,6 +105,11 @@ struct TlsSolution {
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 
+// min over the essential parameters of sum_i lambda_i (w_i . chi_t)^2 / (chi_t^T N chi_t) / rows for
+// the rows `w` (same layout as the system the solution came from), with the solution's lambda and N:
+// the TLS criterion of other data (e.g. with an effect applied) under fixed weights.
+double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution);
+
 // Table III of the paper: per wrench component, ||rho_j|| / ||W_k chi_k (j)|| in %, over the
 // given rows (raw SI, unweighted); nullopt when the denominator is zero.
 std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t);

@@ -1,0 +1,83 @@
+#pragma once
+
+// Gray-box refinement (MODEL.md section 4): starting from the TLS solution, a Ceres problem refines
+// the same parameters jointly with unmodelled effects. The criterion is the TLS one,
+//     sum_i lambda_i (w_i(effects) . chi_t)^2 / (chi_t^T N chi_t)  (up to a constant factor),
+// with the row weights lambda and column metric N of the TLS step, so that with every effect off
+// it returns the TLS solution and any difference is caused by the effects alone.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rotorid/ident/identify.h"
+#include "rotorid/model/effects.h"
+
+namespace rotorid {
+
+struct RefineOptions {
+  // Effects whose parameters are estimated; the others are held at their initial values.
+  std::vector<EffectKind> effects = {kAllEffectKinds.begin(), kAllEffectKinds.end()};
+  // Initial (and, for disabled effects, fixed) values.
+  Effects initial;
+  // With delay enabled: start from a global search of the TLS criterion over this delay range.
+  bool coarse_delay_search = true;
+  double delay_search_min_s = -0.1;
+  double delay_search_max_s = 0.2;
+  double delay_search_step_s = 0.004;
+  // Robust loss on the whitened residuals: "none", "huber" or "cauchy", with its scale.
+  std::string robust_loss = "none";
+  double robust_scale = 3.0;
+  int max_iterations = 100;
+  bool compute_covariance = true;
+  int num_threads = 1;
+
+  std::string Validate() const;
+  bool Enabled(EffectKind kind) const;
+};
+
+struct SolverReport {
+  int iterations = 0;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  std::string termination;
+  std::string message;
+  double seconds = 0.0;
+  std::string full_report;  // Ceres' FullReport()
+};
+
+struct RefineResult {
+  TlsSolution refined;        // chi, covariance and std of the refined parameters; essential as linear
+  Effects effects;
+  Effects effects_std;
+  std::vector<EffectKind> enabled;
+  // Correlation matrix of the enabled effects' scalar parameters, with their labels
+  // (delay_s, motor_tau_s, acc_bias_x, ...).
+  std::vector<std::string> effect_labels;
+  Eigen::MatrixXd effect_correlation;
+  std::vector<std::optional<double>> relative_error_pct;  // identification flights, refined model
+  double linear_criterion = 0.0;   // TLS criterion (mean squared whitened residual) before and after
+  double refined_criterion = 0.0;
+  // Factor by which autocorrelated residuals inflate the parameter variance (already applied).
+  double autocorrelation_factor = 1.0;
+  SolverReport solver;
+  std::vector<std::string> warnings;
+};
+
+RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options);
+
+// Table III of several flights with named parameters and effects applied.
+std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<ProcessedFlight>& flights,
+                                                            const std::map<std::string, double>& parameters,
+                                                            const Effects& effects);
+
+// Named parameter values of a solution.
+std::map<std::string, double> NamedParameters(const IdimSystem& system, const Eigen::VectorXd& chi);
+
+// The TLS criterion (mean squared whitened residual, minimised over the essential parameters with
+// the linear solution's weights and metric) of the flights with these effects applied.
+double EffectCriterion(const IdentificationResult& linear, const Effects& effects);
+
+}  // namespace rotorid

@@ -1,0 +1,338 @@
+#include "rotorid/refine/refine.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <mutex>
+
+#include <ceres/ceres.h>
+
+#include "rotorid/core/error.h"
+#include "rotorid/model/rigid_body.h"
+#include "rotorid/refine/effect_model.h"
+#include "refine/idim_residual.h"
+
+namespace rotorid {
+
+std::string RefineOptions::Validate() const {
+  if (robust_loss != "none" && robust_loss != "huber" && robust_loss != "cauchy")
+    return "robust loss must be none, huber or cauchy, got '" + robust_loss + "'";
+  if (!(robust_scale > 0.0)) return "robust loss scale must be positive";
+  if (!(delay_search_max_s > delay_search_min_s)) return "delay search range is empty";
+  if (!(delay_search_step_s > 0.0)) return "delay search step must be positive";
+  if (max_iterations < 1) return "max_iterations must be at least 1";
+  if (initial.motor_tau_s < 0.0) return "initial motor_tau_s must not be negative";
+  if (num_threads < 1) return "num_threads must be at least 1";
+  return {};
+}
+
+bool RefineOptions::Enabled(EffectKind kind) const {
+  return std::find(effects.begin(), effects.end(), kind) != effects.end();
+}
+
+std::map<std::string, double> NamedParameters(const IdimSystem& system, const Eigen::VectorXd& chi) {
+  std::map<std::string, double> values;
+  for (int k = 0; k < system.num_parameters(); ++k) values[system.parameter_names[k]] = chi[k];
+  return values;
+}
+
+std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<ProcessedFlight>& flights,
+                                                            const std::map<std::string, double>& parameters,
+                                                            const Effects& effects) {
+  std::vector<double> residual_sq(6, 0.0), rotor_sq(6, 0.0);
+  for (const ProcessedFlight& f : flights) {
+    const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(f, effects);
+    const Eigen::VectorXd chi_t = FlightChiT(f.vehicle, parameters);
+    for (Eigen::Index i = 0; i < w.rows(); ++i) {
+      const double rho = w.row(i).dot(chi_t), rotor = w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1];
+      residual_sq[i % 6] += rho * rho;
+      rotor_sq[i % 6] += rotor * rotor;
+    }
+  }
+  std::vector<std::optional<double>> out(6);
+  for (int j = 0; j < 6; ++j)
+    if (rotor_sq[j] > 0.0) out[j] = 100.0 * std::sqrt(residual_sq[j] / rotor_sq[j]);
+  return out;
+}
+
+namespace {
+
+// System rows of all flights with the effects applied, in the layout of the linear system.
+Eigen::MatrixXd SystemRowsWithEffects(const IdentificationResult& linear, const Effects& effects) {
+  const IdimSystem& system = linear.system;
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(system.w.rows(), system.w.cols());
+  const int p = system.num_parameters();
+  int row = 0;
+  for (int f = 0; f < system.num_flights(); ++f) {
+    const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear.flights[f], effects);
+    const int c0 = IdimSystem::ConfigColumn(system.flight_config[f]);
+    w.block(row, 0, wf.rows(), 2) = wf.leftCols(2);
+    w.block(row, c0, wf.rows(), kNumBodyParameters) = wf.middleCols(2, kNumBodyParameters);
+    w.block(row, p, wf.rows(), 1) = wf.rightCols(1);
+    row += static_cast<int>(wf.rows());
+  }
+  return w;
+}
+
+}  // namespace
+
+double EffectCriterion(const IdentificationResult& linear, const Effects& effects) {
+  return MinimumTlsCriterion(SystemRowsWithEffects(linear, effects), linear.solution);
+}
+
+namespace {
+
+using internal::CriterionContext;
+using internal::IdimResidualBlock;
+using internal::RotorSignalCache;
+
+constexpr int kRowSamplesPerBlock = 64;
+
+std::string TerminationName(ceres::TerminationType type) {
+  switch (type) {
+    case ceres::CONVERGENCE: return "convergence";
+    case ceres::NO_CONVERGENCE: return "no convergence (iteration limit)";
+    case ceres::FAILURE: return "failure";
+    case ceres::USER_SUCCESS: return "user success";
+    case ceres::USER_FAILURE: return "user failure";
+  }
+  return "unknown";
+}
+
+// Variance inflation of a mean over autocorrelated residuals: 1 + 2 sum_l (1 - l/(L+1)) rho_l,
+// averaged over the wrench components (Bartlett window, lag as in the TLS statistics).
+double AutocorrelationFactor(const Eigen::VectorXd& residuals) {
+  double factor_sum = 0.0;
+  int components = 0;
+  for (int c = 0; c < 6; ++c) {
+    std::vector<double> x;
+    for (Eigen::Index i = c; i < residuals.size(); i += 6) x.push_back(residuals[i]);
+    const int n = static_cast<int>(x.size());
+    double c0 = 0.0;
+    for (double v : x) c0 += v * v;
+    if (n < 20 || c0 <= 0.0) continue;
+    int cut = 1;
+    std::vector<double> rho(1, 1.0);
+    for (; cut < n / 10; ++cut) {
+      double ck = 0.0;
+      for (int t = 0; t + cut < n; ++t) ck += x[t] * x[t + cut];
+      rho.push_back(ck / c0);
+      if (ck / c0 < 0.1) break;
+    }
+    const int lag = std::min(2 * cut, n / 10);
+    double factor = 1.0;
+    for (int l = 1; l <= lag; ++l) {
+      double ck = 0.0;
+      for (int t = 0; t + l < n; ++t) ck += x[t] * x[t + l];
+      factor += 2.0 * (1.0 - static_cast<double>(l) / (lag + 1)) * ck / c0;
+    }
+    factor_sum += std::max(factor, 1.0);
+    ++components;
+  }
+  return components > 0 ? factor_sum / components : 1.0;
+}
+
+}  // namespace
+
+RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  const IdimSystem& system = linear.system;
+  const TlsSolution& tls = linear.solution;
+  const int p = system.num_parameters();
+  RefineResult result;
+  result.enabled = options.effects;
+
+  // Parameter memory.
+  Eigen::VectorXd chi = tls.chi;
+  Effects start = options.initial;
+  result.linear_criterion = EffectCriterion(linear, Effects{});
+  if (options.Enabled(EffectKind::kDelay) && options.coarse_delay_search) {
+    double best = INFINITY;
+    for (double delay = options.delay_search_min_s; delay <= options.delay_search_max_s + 1e-12;
+         delay += options.delay_search_step_s) {
+      Effects trial = start;
+      trial.delay_s = delay;
+      const double value = EffectCriterion(linear, trial);
+      if (value < best) {
+        best = value;
+        start.delay_s = delay;
+      }
+    }
+  }
+  double delay = start.delay_s, tau = start.motor_tau_s;
+  Eigen::Vector3d acc_bias = start.acc_bias, gyro_bias = start.gyro_bias;
+  const Eigen::Quaterniond q0(Eigen::AngleAxisd(start.misalignment_rad.norm(),
+                                                start.misalignment_rad.norm() > 0 ? start.misalignment_rad.normalized()
+                                                                                  : Eigen::Vector3d::UnitX()));
+  Eigen::Vector4d misalignment = q0.coeffs();  // x y z w
+
+  CriterionContext context;
+  context.metric = tls.column_metric;
+  context.total_rows = static_cast<double>(system.w.rows());
+  context.num_parameters = p;
+
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  std::vector<std::unique_ptr<RotorSignalCache>> caches;
+  const Eigen::VectorXd sqrt_weight = tls.row_weight.cwiseSqrt();
+  int row = 0;
+  for (int f = 0; f < system.num_flights(); ++f) {
+    const ProcessedFlight& flight = linear.flights[f];
+    caches.push_back(std::make_unique<RotorSignalCache>(&flight));
+    for (int first = 0; first < flight.num_rows_samples(); first += kRowSamplesPerBlock) {
+      const int count = std::min(kRowSamplesPerBlock, flight.num_rows_samples() - first);
+      ceres::LossFunction* loss = nullptr;
+      if (options.robust_loss == "huber") loss = new ceres::HuberLoss(options.robust_scale);
+      if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
+      problem.AddResidualBlock(new IdimResidualBlock(&flight, caches.back().get(), &context, system.flight_config[f],
+                                                     first, count, sqrt_weight.segment(row + 6 * first, 6 * count)),
+                               loss, chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(),
+                               misalignment.data());
+    }
+    row += 6 * flight.num_rows_samples();
+  }
+  // Discarded (non-essential) parameters stay at zero, as in the TLS step.
+  std::vector<int> fixed;
+  for (int k = 0; k < p; ++k)
+    if (!tls.essential[k]) fixed.push_back(k);
+  if (fixed.size() == static_cast<size_t>(p)) {
+    problem.SetParameterBlockConstant(chi.data());
+  } else if (!fixed.empty()) {
+    problem.SetManifold(chi.data(), new ceres::SubsetManifold(p, fixed));
+  }
+  problem.SetManifold(misalignment.data(), new ceres::EigenQuaternionManifold);
+  problem.SetParameterLowerBound(&tau, 0, 0.0);
+  if (!options.Enabled(EffectKind::kDelay)) problem.SetParameterBlockConstant(&delay);
+  if (!options.Enabled(EffectKind::kMotorLag)) problem.SetParameterBlockConstant(&tau);
+  if (!options.Enabled(EffectKind::kAccBias)) problem.SetParameterBlockConstant(acc_bias.data());
+  if (!options.Enabled(EffectKind::kGyroBias)) problem.SetParameterBlockConstant(gyro_bias.data());
+  if (!options.Enabled(EffectKind::kMisalignment)) problem.SetParameterBlockConstant(misalignment.data());
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = 1e-12;
+  solver_options.gradient_tolerance = 1e-14;
+  solver_options.parameter_tolerance = 1e-12;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  const auto t0 = std::chrono::steady_clock::now();
+  ceres::Solve(solver_options, &problem, &summary);
+  result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result.solver.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result.solver.initial_cost = summary.initial_cost;
+  result.solver.final_cost = summary.final_cost;
+  result.solver.termination = TerminationName(summary.termination_type);
+  result.solver.message = summary.message;
+  result.solver.full_report = summary.FullReport();
+  if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);
+
+  result.effects.delay_s = delay;
+  result.effects.motor_tau_s = tau;
+  result.effects.acc_bias = acc_bias;
+  result.effects.gyro_bias = gyro_bias;
+  const Eigen::Quaterniond q(misalignment[3], misalignment[0], misalignment[1], misalignment[2]);
+  const Eigen::AngleAxisd aa(q.normalized());
+  result.effects.misalignment_rad = aa.angle() * aa.axis();
+  if (result.effects.misalignment_rad.norm() > M_PI) result.effects.misalignment_rad.setZero();
+
+  result.refined = tls;
+  result.refined.chi = chi;
+  result.refined.covariance.setZero();
+  result.refined.std.setZero();
+  result.refined.rel_std_pct.setZero();
+  result.refined_criterion = EffectCriterion(linear, result.effects);
+
+  // Residuals at the solution, for the noise scale and the autocorrelation factor.
+  std::vector<double> residual_values;
+  double cost = 0.0;
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residual_values, nullptr, nullptr);
+  const Eigen::VectorXd residuals = Eigen::Map<const Eigen::VectorXd>(residual_values.data(), residual_values.size());
+  result.autocorrelation_factor = AutocorrelationFactor(residuals);
+
+  if (options.compute_covariance) {
+    ceres::Covariance::Options covariance_options;
+    covariance_options.algorithm_type = ceres::DENSE_SVD;
+    covariance_options.null_space_rank = -1;
+    covariance_options.min_reciprocal_condition_number = 1e-14;
+    ceres::Covariance covariance(covariance_options);
+    std::vector<const double*> blocks = {chi.data()};
+    std::vector<std::pair<const double*, const double*>> pairs;
+    struct Block {
+      const double* ptr;
+      int tangent;
+      EffectKind kind;
+    };
+    std::vector<Block> effect_blocks;
+    if (options.Enabled(EffectKind::kDelay)) effect_blocks.push_back({&delay, 1, EffectKind::kDelay});
+    if (options.Enabled(EffectKind::kMotorLag)) effect_blocks.push_back({&tau, 1, EffectKind::kMotorLag});
+    if (options.Enabled(EffectKind::kAccBias)) effect_blocks.push_back({acc_bias.data(), 3, EffectKind::kAccBias});
+    if (options.Enabled(EffectKind::kGyroBias)) effect_blocks.push_back({gyro_bias.data(), 3, EffectKind::kGyroBias});
+    if (options.Enabled(EffectKind::kMisalignment))
+      effect_blocks.push_back({misalignment.data(), 3, EffectKind::kMisalignment});
+    std::vector<const double*> all_blocks;
+    if (!problem.IsParameterBlockConstant(chi.data())) all_blocks.push_back(chi.data());
+    for (const Block& b : effect_blocks) all_blocks.push_back(b.ptr);
+    for (size_t a = 0; a < all_blocks.size(); ++a)
+      for (size_t b = a; b < all_blocks.size(); ++b) pairs.emplace_back(all_blocks[a], all_blocks[b]);
+    // Whitened residuals have unit variance only if the noise model is right: scale by the
+    // observed residual variance and by the autocorrelation factor.
+    const double dof = std::max(1.0, static_cast<double>(residuals.size()) - problem.NumParameters());
+    const double scale = std::max(2.0 * cost / dof, 1e-300) * result.autocorrelation_factor;
+    if (covariance.Compute(pairs, &problem)) {
+      std::vector<const double*> tangent_blocks = all_blocks;
+      const Eigen::MatrixXd full = [&] {
+        int dim = 0;
+        for (const double* b : tangent_blocks) dim += problem.ParameterBlockTangentSize(b);
+        Eigen::MatrixXd m(dim, dim);
+        covariance.GetCovarianceMatrixInTangentSpace(tangent_blocks, m.data());
+        return Eigen::MatrixXd(m * scale);
+      }();
+      int offset = 0;
+      if (!problem.IsParameterBlockConstant(chi.data())) {
+        // The chi block's tangent space skips the fixed entries.
+        std::vector<int> free;
+        for (int k = 0; k < p; ++k)
+          if (tls.essential[k]) free.push_back(k);
+        for (size_t a = 0; a < free.size(); ++a)
+          for (size_t b = 0; b < free.size(); ++b) result.refined.covariance(free[a], free[b]) = full(a, b);
+        offset = static_cast<int>(free.size());
+      }
+      int effect_dim = 0;
+      for (const Block& b : effect_blocks) effect_dim += b.tangent;
+      const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
+      int e = 0;
+      for (const Block& b : effect_blocks) {
+        Eigen::VectorXd std_dev = effect_cov.diagonal().segment(e, b.tangent).cwiseMax(0.0).cwiseSqrt();
+        result.effects_std.Set(b.kind, std_dev);
+        const char* axes[3] = {"_x", "_y", "_z"};
+        for (int k = 0; k < b.tangent; ++k)
+          result.effect_labels.push_back(std::string(EffectParameterName(b.kind)) + (b.tangent == 3 ? axes[k] : ""));
+        e += b.tangent;
+      }
+      const Eigen::VectorXd sd = effect_cov.diagonal().cwiseMax(1e-300).cwiseSqrt();
+      result.effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
+    } else {
+      result.warnings.push_back("the covariance of the refined parameters could not be computed (rank-deficient "
+                                "Jacobian: some enabled effects are not identifiable from these flights)");
+    }
+  }
+  result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (int k = 0; k < p; ++k)
+    if (chi[k] != 0.0) result.refined.rel_std_pct[k] = 100.0 * result.refined.std[k] / std::abs(chi[k]);
+  result.relative_error_pct = RelativeErrorWithEffects(linear.flights, NamedParameters(system, chi), result.effects);
+  // Confounded effects: say how much.
+  for (int a = 0; a < result.effect_correlation.rows(); ++a)
+    for (int b = a + 1; b < result.effect_correlation.cols(); ++b)
+      if (std::abs(result.effect_correlation(a, b)) > 0.9)
+        result.warnings.push_back(result.effect_labels[a] + " and " + result.effect_labels[b] +
+                                  " are strongly correlated (" + std::to_string(result.effect_correlation(a, b)) +
+                                  "): these flights separate them poorly");
+  return result;
+}
+
+}  // namespace rotorid

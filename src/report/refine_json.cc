@@ -1,0 +1,85 @@
+#include "rotorid/report/refine_json.h"
+
+#include <cmath>
+
+#include "rotorid/report/json.h"
+
+namespace rotorid {
+
+namespace {
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+}  // namespace
+
+nlohmann::json RefineOptionsJson(const RefineOptions& options) {
+  nlohmann::json effects = nlohmann::json::array();
+  for (EffectKind k : options.effects) effects.push_back(EffectName(k));
+  return {{"effects", effects},
+          {"coarse_delay_search", options.coarse_delay_search},
+          {"delay_search_s", {options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s}},
+          {"robust_loss", options.robust_loss},
+          {"robust_scale", options.robust_scale},
+          {"max_iterations", options.max_iterations}};
+}
+
+nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled) {
+  nlohmann::json out = nlohmann::json::object();
+  for (EffectKind kind : kAllEffectKinds) {
+    const bool on = std::find(enabled.begin(), enabled.end(), kind) != enabled.end();
+    const Eigen::VectorXd v = value.Get(kind), s = std_dev.Get(kind);
+    nlohmann::json entry;
+    if (EffectDimension(kind) == 1) {
+      entry = {{"value", Number(v[0])}, {"std", Number(s[0])}};
+    } else {
+      entry = {{"value", VectorJson(v)}, {"std", VectorJson(s)}};
+    }
+    entry["enabled"] = on;
+    out[EffectParameterName(kind)] = entry;
+  }
+  return out;
+}
+
+nlohmann::json SolverJson(const SolverReport& solver) {
+  return {{"iterations", solver.iterations},   {"initial_cost", Number(solver.initial_cost)},
+          {"final_cost", Number(solver.final_cost)}, {"termination", solver.termination},
+          {"message", solver.message},         {"seconds", Number(solver.seconds)}};
+}
+
+nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResult& refined) {
+  nlohmann::json correlation = nlohmann::json::array();
+  for (Eigen::Index a = 0; a < refined.effect_correlation.rows(); ++a) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index b = 0; b < refined.effect_correlation.cols(); ++b) row.push_back(Number(refined.effect_correlation(a, b)));
+    correlation.push_back(row);
+  }
+  return {{"parameters", ParametersJson(linear.system.parameter_names, refined.refined)},
+          {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled)},
+          {"relative_error_pct", ComponentsJson(refined.relative_error_pct)},
+          {"effect_correlation", {{"labels", refined.effect_labels}, {"matrix", correlation}}},
+          {"criterion", {{"linear", Number(refined.linear_criterion)}, {"refined", Number(refined.refined_criterion)}}},
+          {"autocorrelation_factor", Number(refined.autocorrelation_factor)},
+          {"solver", SolverJson(refined.solver)},
+          {"warnings", refined.warnings}};
+}
+
+Effects EffectsFromReport(const nlohmann::json& report) {
+  Effects effects;
+  if (!report.contains("refined") || !report["refined"].contains("effects")) return effects;
+  const nlohmann::json& block = report["refined"]["effects"];
+  for (EffectKind kind : kAllEffectKinds) {
+    const char* name = EffectParameterName(kind);
+    if (!block.contains(name) || !block[name].contains("value")) continue;
+    const nlohmann::json& v = block[name]["value"];
+    Eigen::VectorXd value(EffectDimension(kind));
+    if (v.is_number()) {
+      value[0] = v.get<double>();
+    } else if (v.is_array() && static_cast<int>(v.size()) == value.size()) {
+      for (int k = 0; k < value.size(); ++k) value[k] = v[k].is_number() ? v[k].get<double>() : 0.0;
+    } else {
+      continue;
+    }
+    effects.Set(kind, value);
+  }
+  return effects;
+}
+
+}  // namespace rotorid

@@ -1,0 +1,144 @@
+#include "rotorid/report/json.h"
+
+#include <cmath>
+
+#include "rotorid/core/error.h"
+#include "rotorid/io/atomic_file.h"
+#include "rotorid/model/parameters.h"
+
+namespace rotorid {
+
+namespace {
+// JSON has no NaN or infinity: they become null.
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+}  // namespace
+
+nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
+  nlohmann::json out = nlohmann::json::object();
+  for (size_t k = 0; k < names.size(); ++k) {
+    nlohmann::json entry = {{"value", Number(solution.chi[k])},
+                            {"std", Number(solution.std[k])},
+                            {"rel_std_pct", Number(solution.rel_std_pct[k])},
+                            {"essential", static_cast<bool>(solution.essential[k])}};
+    for (const DiscardedParameter& d : solution.discarded) {
+      if (d.name != names[k]) continue;
+      entry["std"] = Number(d.std);
+      entry["estimate_when_discarded"] = Number(d.value);
+      entry["most_correlated_with"] = d.most_correlated;
+      entry["correlation"] = Number(d.correlation);
+    }
+    out[names[k]] = entry;
+  }
+  return out;
+}
+
+nlohmann::json ComponentsJson(const std::vector<std::optional<double>>& values) {
+  nlohmann::json out = nlohmann::json::object();
+  for (size_t j = 0; j < values.size() && j < kWrenchComponentNames.size(); ++j)
+    out[kWrenchComponentNames[j]] = values[j] ? Number(*values[j]) : nlohmann::json(nullptr);
+  return out;
+}
+
+nlohmann::json VectorJson(const Eigen::VectorXd& v) {
+  nlohmann::json out = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(Number(v[i]));
+  return out;
+}
+
+nlohmann::json ObservationOptionsJson(const ObservationOptions& options) {
+  return {{"source", DataSourceName(options.source)},
+          {"filter", {{"type", "butterworth low-pass, zero-phase"},
+                      {"order", options.filter.order},
+                      {"cutoff_hz", options.filter.cutoff_hz}}},
+          {"row_rate_hz", options.row_rate_hz},
+          {"edge_trim_s", options.edge_trim_s}};
+}
+
+ObservationOptions ObservationOptionsFromJson(const nlohmann::json& j) {
+  ObservationOptions options;
+  if (!j.is_object()) return options;
+  if (j.contains("source")) options.source = j.at("source").get<std::string>() == "mocap" ? DataSource::kMocap : DataSource::kImu;
+  if (j.contains("filter")) {
+    options.filter.order = j.at("filter").value("order", options.filter.order);
+    options.filter.cutoff_hz = j.at("filter").value("cutoff_hz", options.filter.cutoff_hz);
+  }
+  options.row_rate_hz = j.value("row_rate_hz", options.row_rate_hz);
+  options.edge_trim_s = j.value("edge_trim_s", options.edge_trim_s);
+  return options;
+}
+
+nlohmann::json TlsOptionsJson(const TlsOptions& options) {
+  return {{"method", TlsMethodName(options.method)},
+          {"weight_by_component", options.weight_by_component},
+          {"select_essential", options.select_essential},
+          {"r_sigma", options.r_sigma},
+          {"max_rel_std_pct", options.max_rel_std_pct},
+          {"fixed_zero", options.fixed_zero}};
+}
+
+nlohmann::json FlightFitJson(const FlightFit& fit) {
+  const Excitation& e = fit.excitation;
+  return {{"log", fit.source},
+          {"config", fit.config},
+          {"weight", fit.weight},
+          {"samples", fit.samples},
+          {"row_samples", fit.row_samples},
+          {"duration_s", fit.duration_s},
+          {"excitation", {{"angular_acceleration_rms", VectorJson(e.angular_acceleration_rms)},
+                          {"angular_velocity_rms", VectorJson(e.angular_velocity_rms)},
+                          {"thrust_variation_pct", Number(e.thrust_variation_pct)}}},
+          {"relative_error_pct", ComponentsJson(fit.relative_error_pct)},
+          {"mean_force_residual_n", VectorJson(fit.mean_force_residual_n)}};
+}
+
+nlohmann::json LinearJson(const IdentificationResult& result) {
+  const TlsSolution& s = result.solution;
+  nlohmann::json discarded = nlohmann::json::array();
+  for (const DiscardedParameter& d : s.discarded)
+    discarded.push_back({{"name", d.name},
+                         {"rel_std_pct", Number(d.rel_std_pct)},
+                         {"most_correlated_with", d.most_correlated},
+                         {"correlation", Number(d.correlation)}});
+  nlohmann::json flights = nlohmann::json::array();
+  for (const FlightFit& fit : result.per_flight) flights.push_back(FlightFitJson(fit));
+  return {{"method", TlsMethodName(s.method)},
+          {"parameters", ParametersJson(result.system.parameter_names, s)},
+          {"relative_error_pct", ComponentsJson(result.relative_error_pct)},
+          {"discarded", discarded},
+          {"flights", flights},
+          {"statistics", {{"sigma_w", Number(s.sigma_w)},
+                          {"singular_values", VectorJson(s.singular_values)},
+                          {"scale_entry", Number(s.scale_entry)},
+                          {"iterations", s.iterations},
+                          {"rows", result.system.w.rows()}}},
+          {"warnings", result.warnings}};
+}
+
+std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
+                                                        const std::string& block) {
+  std::string chosen = block;
+  if (chosen.empty()) chosen = report.contains("refined") && report["refined"].contains("parameters") ? "refined" : "linear";
+  if (!report.is_object() || !report.contains(chosen) || !report[chosen].is_object() ||
+      !report[chosen].contains("parameters") || !report[chosen]["parameters"].is_object())
+    throw Error(source + ": not a rotorid identify/refine report (no '" + chosen + ".parameters')");
+  std::map<std::string, double> values;
+  for (const auto& [name, entry] : report[chosen]["parameters"].items()) {
+    if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
+      throw Error(source + ": parameter '" + name + "' has no numeric value");
+    values[name] = entry["value"].get<double>();
+  }
+  return values;
+}
+
+nlohmann::json ReadJsonFile(const std::string& path) {
+  const std::string text = ReadFile(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(path + ": not valid JSON: " + e.what());
+  }
+}
+
+void WriteJsonFile(const std::string& path, const nlohmann::json& j) { WriteFileAtomically(path, j.dump(2) + "\n"); }
+
+}  // namespace rotorid
