@@ -45,7 +45,8 @@ Eigen::VectorXd SosFilterCausal(const SosFilter& filter, const Eigen::Ref<const 
 
 // Zero-phase forward-backward filtering with odd extension of the edges and steady-state initial
 // conditions, as scipy.signal.sosfiltfilt(padtype='odd') with its default pad length
-// 3 * (2 * sections + 1). Signals shorter than the pad are padded as far as they allow.
+// 3 * (2 * sections + 1) (one tap less when there is a first-order section, as scipy counts it).
+// Signals shorter than the pad are padded as far as they allow; sizes 0 and 1 come back unchanged.
 Eigen::VectorXd FiltFilt(const SosFilter& filter, const Eigen::Ref<const Eigen::VectorXd>& x);
 // FiltFilt on every column.
 Eigen::MatrixXd FiltFiltColumns(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& x);

@@ -17,7 +17,8 @@ Eigen::VectorXd UniformTimeBase(double t_begin_s, double t_end_s, double rate_hz
 Eigen::MatrixXd InterpolateLinear(const Eigen::Ref<const Eigen::VectorXd>& t, const Eigen::Ref<const Eigen::MatrixXd>& x,
                                   const Eigen::Ref<const Eigen::VectorXd>& t_query);
 
-// Zero-order hold (last value at or before each query), for commands and counters.
+// Zero-order hold (last value at or before each query), for commands and counters. Queries before
+// t.front() take the first value. Throws rotorid::Error like InterpolateLinear.
 Eigen::MatrixXd InterpolateHold(const Eigen::Ref<const Eigen::VectorXd>& t, const Eigen::Ref<const Eigen::MatrixXd>& x,
                                 const Eigen::Ref<const Eigen::VectorXd>& t_query);
 
