@@ -23,8 +23,8 @@ std::string ObservationOptions::Validate() const {
 
 namespace {
 
-// Variance gain of white noise through filtfilt (|H|^2 applied twice) and, optionally, a
-// central difference (|sin(w dt)/dt|^2 per application): (2/fs) * integral over [0, fs/2].
+// Variance gain of white noise through filtfilt (|H|^2 applied twice) and, optionally, the
+// fourth-order central difference (per application): (2/fs) * integral over [0, fs/2].
 double NoiseVarianceGain(const SosFilter& filter, double fs, int differentiations) {
   const int steps = 4000;
   const double nyquist = 0.5 * fs, dt = 1.0 / fs;
@@ -33,7 +33,8 @@ double NoiseVarianceGain(const SosFilter& filter, double fs, int differentiation
     const double f = nyquist * k / steps;
     const double h = filter.Gain(f, fs);
     double value = h * h * h * h;
-    const double d = std::sin(2.0 * M_PI * f * dt) / dt;
+    const double phase = 2.0 * M_PI * f * dt;  // response of FourthOrderCentralDifference
+    const double d = (8.0 * std::sin(phase) - std::sin(2.0 * phase)) / (6.0 * dt);
     for (int i = 0; i < differentiations; ++i) value *= d * d;
     integral += (k == 0 || k == steps ? 0.5 : 1.0) * value;
   }
@@ -93,7 +94,7 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     const Eigen::MatrixXd gyro = InterpolateLinear(log.t_s, log.gyro_radps, out.t_s);
     const Eigen::MatrixXd acc = InterpolateLinear(log.t_s, log.acc_mps2, out.t_s);
     out.angular_velocity = FiltFiltColumns(filter, gyro);
-    out.angular_acceleration = CentralDifference(out.angular_velocity, dt);
+    out.angular_acceleration = FourthOrderCentralDifference(out.angular_velocity, dt);
     out.specific_force = FiltFiltColumns(filter, acc);
     const Eigen::Vector3d gyro_noise = ColumnNoise(gyro), acc_noise = ColumnNoise(acc);
     out.noise.angular_velocity = gyro_noise * gain0;
@@ -105,9 +106,10 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     angles = InterpolateLinear(log.t_s, angles, out.t_s);
     const Eigen::MatrixXd position = InterpolateLinear(log.t_s, log.mocap->position_w_m, out.t_s);
     const Eigen::MatrixXd eta = FiltFiltColumns(filter, angles);
-    const Eigen::MatrixXd eta_dot = CentralDifference(eta, dt);
-    const Eigen::MatrixXd eta_ddot = CentralDifference(eta_dot, dt);
-    const Eigen::MatrixXd accel_w = CentralDifference(CentralDifference(FiltFiltColumns(filter, position), dt), dt);
+    const Eigen::MatrixXd eta_dot = FourthOrderCentralDifference(eta, dt);
+    const Eigen::MatrixXd eta_ddot = FourthOrderCentralDifference(eta_dot, dt);
+    const Eigen::MatrixXd accel_w =
+        FourthOrderCentralDifference(FourthOrderCentralDifference(FiltFiltColumns(filter, position), dt), dt);
     out.angular_velocity.resize(n, 3);
     out.angular_acceleration.resize(n, 3);
     out.specific_force.resize(n, 3);
