@@ -4,6 +4,7 @@
 
 #include "rotorid/core/error.h"
 #include "rotorid/io/flight_csv.h"
+#include "rotorid/io/px4_flight.h"
 
 namespace rotorid {
 
@@ -29,8 +30,13 @@ FlightLog LoadFlightLog(const std::string& path, const Vehicle& vehicle, const F
   switch (DetectLogFormat(path)) {
     case LogFormat::kCsv:
       return ReadFlightCsv(path, vehicle.num_rotors());
-    case LogFormat::kULog:
-      throw Error(path + ": PX4 ULog input is not available in this build yet");
+    case LogFormat::kULog: {
+      // docs/px4_ulog.md: measured esc_rpm when present ("auto"), else the motor commands.
+      Px4FlightOptions px4;
+      if (options.rotor_signal == "rpm") px4.rotor = Px4RotorSource::kEscRpm;
+      if (options.rotor_signal == "command") px4.rotor = Px4RotorSource::kCommand;
+      return ReadPx4Flight(path, vehicle.num_rotors(), px4);
+    }
     case LogFormat::kCrazyflieUsd:
       throw Error(path + ": Crazyflie micro-SD input is not available in this build yet");
   }
