@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds rotorid twice and runs every test: a Release build, then a Debug build of our code with
 # -fsanitize=address,undefined. Exits non-zero on the first failure.
+# Installs the dependencies first (Debian; set ROTORID_SKIP_DEPS=1 to skip).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ "${ROTORID_SKIP_DEPS:-0}" != "1" ]; then bash scripts/install_deps.sh; fi
 JOBS=${JOBS:-$(nproc)}
 
 cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release

@@ -1,15 +1,72 @@
-#include "commands.h"
+#include <iostream>
+#include <memory>
 
+#include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/refine/delay.h"
+#include "rotorid/report/json.h"
+#include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
 
-// Placeholder until the delay issue lands: registers the subcommand and refuses to run.
 Command AddDelayCommand(CLI::App& root) {
+  struct Options {
+    FlightOptions flights;
+    IdentifyCliOptions identify;
+    DelayOptions delay;
+  };
+  auto options = std::make_shared<Options>();
   Command command;
-  command.app = root.add_subcommand("delay", "delay (not yet available)");
-  command.app->allow_extras();
-  command.run = [] () -> int { throw Error("'delay' is not available in this build yet"); };
+  command.app = root.add_subcommand(
+      "delay", "estimates the command-to-IMU delay of a log with its std: a global search of the TLS criterion, then "
+               "the joint refinement");
+  AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
+  AddIdentifyOptions(command.app, &options->identify);
+  command.app->add_option("--min-s", options->delay.min_s, "smallest delay searched (s)")->capture_default_str();
+  command.app->add_option("--max-s", options->delay.max_s, "largest delay searched (s)")->capture_default_str();
+  command.app->add_option("--step-s", options->delay.step_s, "grid step of the global search (s)")
+      ->capture_default_str();
+  command.app->add_flag("--with-motor-lag", options->delay.with_motor_lag, "estimate the motor time constant jointly");
+  command.app->add_option("--threads", options->delay.num_threads)->capture_default_str();
+  command.run = [options]() {
+    IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
+    // The delay shows in every parameter; a partial linear start is fine here.
+    identify.allow_partial = true;
+    const IdentificationResult linear =
+        Identify(LoadTrainingFlights(options->flights, SourceOptions(options->identify)), identify);
+    const DelayEstimate estimate = EstimateDelay(linear, options->delay);
+    if (!options->flights.json_path.empty()) {
+      nlohmann::json curve = nlohmann::json::array();
+      for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
+      WriteJsonFile(options->flights.json_path,
+                    {{"rotorid_version", kRotoridVersion},
+                     {"command", "delay"},
+                     {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
+                                   {"tls", TlsOptionsJson(identify.tls)},
+                                   {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
+                                   {"with_motor_lag", options->delay.with_motor_lag}}},
+                     {"delay_s", estimate.delay_s},
+                     {"delay_std_s", estimate.delay_std_s},
+                     {"grid_best_s", estimate.grid_best_s},
+                     {"motor_tau_s", estimate.motor_tau_s},
+                     {"motor_tau_std_s", estimate.motor_tau_std_s},
+                     {"criterion_curve", curve},
+                     {"linear", LinearJson(linear)},
+                     {"refined", RefinedJson(linear, estimate.refined)},
+                     {"warnings", estimate.warnings}});
+    }
+    if (!options->flights.quiet) {
+      std::cout << "rotorid delay: " << 1000 * estimate.delay_s << " ms +- " << 1000 * estimate.delay_std_s
+                << " ms (global search best " << 1000 * estimate.grid_best_s << " ms over ["
+                << 1000 * options->delay.min_s << ", " << 1000 * options->delay.max_s << "] ms)";
+      if (options->delay.with_motor_lag)
+        std::cout << "; motor time constant " << 1000 * estimate.motor_tau_s << " ms +- "
+                  << 1000 * estimate.motor_tau_std_s << " ms";
+      std::cout << "\n";
+      PrintWarnings(estimate.warnings);
+    }
+    return 0;
+  };
   return command;
 }
 

@@ -74,6 +74,8 @@ Command AddRefineCommand(CLI::App& root) {
       ->capture_default_str();
   command.app->add_flag("!--no-delay-search", options->refine.coarse_delay_search,
                         "start the delay at --init instead of a global search");
+  command.app->add_flag("!--keep-discarded", options->refine.reselect_essential,
+                        "keep the linear step's discarded parameters at zero (no re-selection on corrected rows)");
   command.app->add_option("--max-iterations", options->refine.max_iterations)->capture_default_str();
   command.app->add_option("--threads", options->refine.num_threads)->capture_default_str();
   command.run = [options]() {

@@ -122,6 +122,7 @@ std::string Number(double value) {
 IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   IdentificationResult result;
+  result.options = options;
   result.flights = std::move(flights);
   result.system = BuildIdimSystem(result.flights);
   result.solution = SolveIdim(result.system, options.tls);

@@ -8,7 +8,7 @@ namespace rotorid::internal {
 bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const int p = context_->num_parameters;
   Eigen::VectorXd chi_t(p + 1);
-  chi_t << Eigen::Map<const Eigen::VectorXd>(parameters[0], p), 1.0;
+  chi_t << Eigen::Map<const Eigen::VectorXd>(parameters[0], p).cwiseProduct(context_->chi_scale), 1.0;
   const Eigen::VectorXd n_chi = context_->metric * chi_t;
   const double d_sq = chi_t.dot(n_chi) / context_->total_rows;
   if (!(d_sq > 0.0)) return false;
@@ -64,6 +64,7 @@ bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residu
         j[0] += scale * rows(c, 0).a;
         j[1] += scale * rows(c, 1).a;
         for (int k = 0; k < kNumBodyParameters; ++k) j[c0 + k] += scale * rows(c, 2 + k).a;
+        for (int k = 0; k < p; ++k) j[k] *= context_->chi_scale[k];
       }
       static constexpr int kOffsets[5] = {0, 1, 2, 5, 8};
       static constexpr int kSizes[5] = {1, 1, 3, 3, 4};

@@ -48,13 +48,16 @@ class RotorSignalCache {
 // Shared by all residual blocks: the TLS weights and metric and the row offsets.
 struct CriterionContext {
   Eigen::MatrixXd metric;  // N over all p + 1 columns
+  // The chi block holds chi ./ chi_scale, so that its Jacobian columns are of comparable size (kt is
+  // ~1e-6 N s^2, an inertia ~1e-2 kg m^2): the solver and ceres::Covariance see a well-conditioned problem.
+  Eigen::VectorXd chi_scale;
   double total_rows = 0.0;
   int num_parameters = 0;
 };
 
 // Whitened TLS residuals of `count` row samples of one flight:
 //   r = sqrt(lambda) * (w(effects) . chi_t) / d,   d^2 = chi_t^T N chi_t / rows.
-// Parameter blocks: chi (p), delay (1), tau (1), acc bias (3), gyro bias (3), misalignment
+// Parameter blocks: chi ./ chi_scale (p), delay (1), tau (1), acc bias (3), gyro bias (3), misalignment
 // quaternion (4, Eigen layout x y z w; v_imu = q v_body). The rows come from the templated model
 // with Jets over the effect parameters; chi enters linearly and is differentiated by hand.
 class IdimResidualBlock : public ceres::CostFunction {

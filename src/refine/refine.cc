@@ -6,6 +6,8 @@
 #include <memory>
 #include <mutex>
 
+#include <Eigen/SVD>
+
 #include <ceres/ceres.h>
 
 #include "rotorid/core/error.h"
@@ -135,42 +137,89 @@ double AutocorrelationFactor(const Eigen::VectorXd& residuals) {
 
 }  // namespace
 
-RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
-  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+namespace {
+
+// Labels of the tangent coordinates of the effect blocks.
+template <typename Blocks>
+std::vector<std::string> effect_blocks_labels(const Blocks& blocks) {
+  std::vector<std::string> labels;
+  const char* axes[3] = {"_x", "_y", "_z"};
+  for (const auto& b : blocks)
+    for (int k = 0; k < b.tangent; ++k)
+      labels.push_back(std::string(EffectParameterName(b.kind)) + (b.tangent == 3 ? axes[k] : ""));
+  return labels;
+}
+
+// The parameters taking part in the (numerical) null space of the Jacobian, in tangent
+// coordinates with equilibrated columns: what the flights cannot tell apart.
+std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std::vector<const double*>& blocks,
+                                             const IdimSystem& system, const std::vector<int>& free,
+                                             const std::vector<std::string>& effect_labels) {
+  ceres::Problem::EvaluateOptions evaluate;
+  for (const double* b : blocks) evaluate.parameter_blocks.push_back(const_cast<double*>(b));
+  ceres::CRSMatrix crs;
+  problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
+  // Ambient Jacobian -> tangent: chi's tangent drops the fixed entries, the quaternion's is 3-d;
+  // a column scaling makes the SVD see directions, not units.
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r)
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jac(r, crs.cols[k]) = crs.values[k];
+  std::vector<std::string> labels;
+  Eigen::MatrixXd tangent_jac(crs.num_rows, 0);
+  int column = 0;
+  for (const double* b : blocks) {
+    const int ambient = problem->ParameterBlockSize(b);
+    const int tangent = problem->ParameterBlockTangentSize(b);
+    Eigen::MatrixXd plus_jacobian = Eigen::MatrixXd::Identity(ambient, tangent);
+    if (const ceres::Manifold* manifold = problem->GetManifold(b)) {
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> pj(ambient, tangent);
+      manifold->PlusJacobian(b, pj.data());
+      plus_jacobian = pj;
+    }
+    Eigen::MatrixXd block_jac = jac.middleCols(column, ambient) * plus_jacobian;
+    tangent_jac.conservativeResize(Eigen::NoChange, tangent_jac.cols() + tangent);
+    tangent_jac.rightCols(tangent) = block_jac;
+    column += ambient;
+  }
+  for (int k : free) labels.push_back(system.parameter_names[k]);
+  labels.insert(labels.end(), effect_labels.begin(), effect_labels.end());
+  const Eigen::VectorXd norms = tangent_jac.colwise().norm().transpose().cwiseMax(1e-300);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(tangent_jac * norms.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  std::vector<std::string> names;
+  for (Eigen::Index j = 0; j < sv.size(); ++j) {
+    if (sv[j] > 1e-7 * sv[0]) continue;
+    const Eigen::VectorXd v = svd.matrixV().col(j);
+    for (Eigen::Index k = 0; k < v.size() && k < static_cast<Eigen::Index>(labels.size()); ++k)
+      if (std::abs(v[k]) > 0.2 && std::find(names.begin(), names.end(), labels[k]) == names.end())
+        names.push_back(labels[k]);
+  }
+  return names;
+}
+
+// One Ceres pass: the rows of `linear`'s flights with effects, the criterion (lambda, N) of `tls`,
+// started at tls.chi and `start`. Fills chi, effects, their covariance and the solver report.
+RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
+                          const RefineOptions& options) {
   const IdimSystem& system = linear.system;
-  const TlsSolution& tls = linear.solution;
   const int p = system.num_parameters();
   RefineResult result;
   result.enabled = options.effects;
-
-  // Parameter memory.
-  Eigen::VectorXd chi = tls.chi;
-  Effects start = options.initial;
-  result.linear_criterion = EffectCriterion(linear, Effects{});
-  if (options.Enabled(EffectKind::kDelay) && options.coarse_delay_search) {
-    double best = INFINITY;
-    for (double delay = options.delay_search_min_s; delay <= options.delay_search_max_s + 1e-12;
-         delay += options.delay_search_step_s) {
-      Effects trial = start;
-      trial.delay_s = delay;
-      const double value = EffectCriterion(linear, trial);
-      if (value < best) {
-        best = value;
-        start.delay_s = delay;
-      }
-    }
-  }
-  double delay = start.delay_s, tau = start.motor_tau_s;
-  Eigen::Vector3d acc_bias = start.acc_bias, gyro_bias = start.gyro_bias;
-  const Eigen::Quaterniond q0(Eigen::AngleAxisd(start.misalignment_rad.norm(),
-                                                start.misalignment_rad.norm() > 0 ? start.misalignment_rad.normalized()
-                                                                                  : Eigen::Vector3d::UnitX()));
-  Eigen::Vector4d misalignment = q0.coeffs();  // x y z w
 
   CriterionContext context;
   context.metric = tls.column_metric;
   context.total_rows = static_cast<double>(system.w.rows());
   context.num_parameters = p;
+  context.chi_scale.resize(p);
+  for (int k = 0; k < p; ++k) context.chi_scale[k] = std::max({std::abs(tls.chi[k]), tls.std[k], 1e-12});
+  Eigen::VectorXd scaled_chi = tls.chi.cwiseQuotient(context.chi_scale);
+  double delay = start.delay_s, tau = start.motor_tau_s;
+  Eigen::Vector3d acc_bias = start.acc_bias, gyro_bias = start.gyro_bias;
+  const double angle = start.misalignment_rad.norm();
+  Eigen::Vector4d misalignment =
+      Eigen::Quaterniond(Eigen::AngleAxisd(angle, angle > 0 ? Eigen::Vector3d(start.misalignment_rad / angle)
+                                                            : Eigen::Vector3d::UnitX()))
+          .coeffs();  // x y z w
 
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -189,19 +238,18 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
       problem.AddResidualBlock(new IdimResidualBlock(&flight, caches.back().get(), &context, system.flight_config[f],
                                                      first, count, sqrt_weight.segment(row + 6 * first, 6 * count)),
-                               loss, chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(),
+                               loss, scaled_chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(),
                                misalignment.data());
     }
     row += 6 * flight.num_rows_samples();
   }
   // Discarded (non-essential) parameters stay at zero, as in the TLS step.
-  std::vector<int> fixed;
-  for (int k = 0; k < p; ++k)
-    if (!tls.essential[k]) fixed.push_back(k);
-  if (fixed.size() == static_cast<size_t>(p)) {
-    problem.SetParameterBlockConstant(chi.data());
+  std::vector<int> fixed, free;
+  for (int k = 0; k < p; ++k) (tls.essential[k] ? free : fixed).push_back(k);
+  if (free.empty()) {
+    problem.SetParameterBlockConstant(scaled_chi.data());
   } else if (!fixed.empty()) {
-    problem.SetManifold(chi.data(), new ceres::SubsetManifold(p, fixed));
+    problem.SetManifold(scaled_chi.data(), new ceres::SubsetManifold(p, fixed));
   }
   problem.SetManifold(misalignment.data(), new ceres::EigenQuaternionManifold);
   problem.SetParameterLowerBound(&tau, 0, 0.0);
@@ -231,21 +279,20 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   result.solver.full_report = summary.FullReport();
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);
 
+  const Eigen::VectorXd chi = scaled_chi.cwiseProduct(context.chi_scale);
   result.effects.delay_s = delay;
   result.effects.motor_tau_s = tau;
   result.effects.acc_bias = acc_bias;
   result.effects.gyro_bias = gyro_bias;
-  const Eigen::Quaterniond q(misalignment[3], misalignment[0], misalignment[1], misalignment[2]);
-  const Eigen::AngleAxisd aa(q.normalized());
+  const Eigen::AngleAxisd aa(Eigen::Quaterniond(misalignment[3], misalignment[0], misalignment[1], misalignment[2])
+                                 .normalized());
   result.effects.misalignment_rad = aa.angle() * aa.axis();
-  if (result.effects.misalignment_rad.norm() > M_PI) result.effects.misalignment_rad.setZero();
 
   result.refined = tls;
   result.refined.chi = chi;
   result.refined.covariance.setZero();
   result.refined.std.setZero();
   result.refined.rel_std_pct.setZero();
-  result.refined_criterion = EffectCriterion(linear, result.effects);
 
   // Residuals at the solution, for the noise scale and the autocorrelation factor.
   std::vector<double> residual_values;
@@ -255,13 +302,6 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   result.autocorrelation_factor = AutocorrelationFactor(residuals);
 
   if (options.compute_covariance) {
-    ceres::Covariance::Options covariance_options;
-    covariance_options.algorithm_type = ceres::DENSE_SVD;
-    covariance_options.null_space_rank = -1;
-    covariance_options.min_reciprocal_condition_number = 1e-14;
-    ceres::Covariance covariance(covariance_options);
-    std::vector<const double*> blocks = {chi.data()};
-    std::vector<std::pair<const double*, const double*>> pairs;
     struct Block {
       const double* ptr;
       int tangent;
@@ -274,41 +314,36 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     if (options.Enabled(EffectKind::kGyroBias)) effect_blocks.push_back({gyro_bias.data(), 3, EffectKind::kGyroBias});
     if (options.Enabled(EffectKind::kMisalignment))
       effect_blocks.push_back({misalignment.data(), 3, EffectKind::kMisalignment});
-    std::vector<const double*> all_blocks;
-    if (!problem.IsParameterBlockConstant(chi.data())) all_blocks.push_back(chi.data());
-    for (const Block& b : effect_blocks) all_blocks.push_back(b.ptr);
-    for (size_t a = 0; a < all_blocks.size(); ++a)
-      for (size_t b = a; b < all_blocks.size(); ++b) pairs.emplace_back(all_blocks[a], all_blocks[b]);
+    std::vector<const double*> blocks;
+    if (!free.empty()) blocks.push_back(scaled_chi.data());
+    for (const Block& b : effect_blocks) blocks.push_back(b.ptr);
+    std::vector<std::pair<const double*, const double*>> pairs;
+    for (size_t a = 0; a < blocks.size(); ++a)
+      for (size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
+    ceres::Covariance::Options covariance_options;
+    covariance_options.algorithm_type = ceres::DENSE_SVD;
+    covariance_options.null_space_rank = 0;
+    ceres::Covariance covariance(covariance_options);
     // Whitened residuals have unit variance only if the noise model is right: scale by the
     // observed residual variance and by the autocorrelation factor.
     const double dof = std::max(1.0, static_cast<double>(residuals.size()) - problem.NumParameters());
     const double scale = std::max(2.0 * cost / dof, 1e-300) * result.autocorrelation_factor;
-    if (covariance.Compute(pairs, &problem)) {
-      std::vector<const double*> tangent_blocks = all_blocks;
-      const Eigen::MatrixXd full = [&] {
-        int dim = 0;
-        for (const double* b : tangent_blocks) dim += problem.ParameterBlockTangentSize(b);
-        Eigen::MatrixXd m(dim, dim);
-        covariance.GetCovarianceMatrixInTangentSpace(tangent_blocks, m.data());
-        return Eigen::MatrixXd(m * scale);
-      }();
-      int offset = 0;
-      if (!problem.IsParameterBlockConstant(chi.data())) {
-        // The chi block's tangent space skips the fixed entries.
-        std::vector<int> free;
-        for (int k = 0; k < p; ++k)
-          if (tls.essential[k]) free.push_back(k);
-        for (size_t a = 0; a < free.size(); ++a)
-          for (size_t b = 0; b < free.size(); ++b) result.refined.covariance(free[a], free[b]) = full(a, b);
-        offset = static_cast<int>(free.size());
-      }
-      int effect_dim = 0;
-      for (const Block& b : effect_blocks) effect_dim += b.tangent;
+    if (!blocks.empty() && covariance.Compute(pairs, &problem)) {
+      int dim = 0;
+      for (const double* b : blocks) dim += problem.ParameterBlockTangentSize(b);
+      Eigen::MatrixXd full(dim, dim);
+      covariance.GetCovarianceMatrixInTangentSpace(blocks, full.data());
+      full *= scale;
+      const int offset = static_cast<int>(free.size());
+      for (int a = 0; a < offset; ++a)
+        for (int b = 0; b < offset; ++b)
+          result.refined.covariance(free[a], free[b]) =
+              full(a, b) * context.chi_scale[free[a]] * context.chi_scale[free[b]];
+      const int effect_dim = dim - offset;
       const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
       int e = 0;
       for (const Block& b : effect_blocks) {
-        Eigen::VectorXd std_dev = effect_cov.diagonal().segment(e, b.tangent).cwiseMax(0.0).cwiseSqrt();
-        result.effects_std.Set(b.kind, std_dev);
+        result.effects_std.Set(b.kind, effect_cov.diagonal().segment(e, b.tangent).cwiseMax(0.0).cwiseSqrt());
         const char* axes[3] = {"_x", "_y", "_z"};
         for (int k = 0; k < b.tangent; ++k)
           result.effect_labels.push_back(std::string(EffectParameterName(b.kind)) + (b.tangent == 3 ? axes[k] : ""));
@@ -316,15 +351,59 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       }
       const Eigen::VectorXd sd = effect_cov.diagonal().cwiseMax(1e-300).cwiseSqrt();
       result.effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
-    } else {
-      result.warnings.push_back("the covariance of the refined parameters could not be computed (rank-deficient "
-                                "Jacobian: some enabled effects are not identifiable from these flights)");
+    } else if (!blocks.empty()) {
+      result.rank_deficient = true;
+      result.confounded = NullSpaceParameters(&problem, blocks, linear.system, free, effect_blocks_labels(effect_blocks));
+      std::string names;
+      for (const std::string& n : result.confounded) names += (names.empty() ? "" : ", ") + n;
+      result.warnings.push_back("the refined parameters are not jointly identifiable from these flights (rank-deficient "
+                                "Jacobian); confounded: " + names + ". Their std is not reported.");
     }
   }
   result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   for (int k = 0; k < p; ++k)
     if (chi[k] != 0.0) result.refined.rel_std_pct[k] = 100.0 * result.refined.std[k] / std::abs(chi[k]);
-  result.relative_error_pct = RelativeErrorWithEffects(linear.flights, NamedParameters(system, chi), result.effects);
+  return result;
+}
+
+}  // namespace
+
+RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  Effects start = options.initial;
+  const double linear_criterion = EffectCriterion(linear, Effects{});
+  if (options.Enabled(EffectKind::kDelay) && options.coarse_delay_search) {
+    double best = INFINITY;
+    for (double delay = options.delay_search_min_s; delay <= options.delay_search_max_s + 1e-12;
+         delay += options.delay_search_step_s) {
+      Effects trial = start;
+      trial.delay_s = delay;
+      const double value = EffectCriterion(linear, trial);
+      if (value < best) {
+        best = value;
+        start.delay_s = delay;
+      }
+    }
+  }
+  RefineResult result = SolveEffects(linear, linear.solution, start, options);
+  if (options.reselect_essential && !options.effects.empty()) {
+    // TLS on the effect-corrected rows, with the identification's own options, then a second pass.
+    IdimSystem corrected = linear.system;
+    corrected.w = SystemRowsWithEffects(linear, result.effects);
+    TlsSolution reselected = SolveIdim(corrected, linear.options.tls);
+    if (reselected.usable && reselected.essential != linear.solution.essential) {
+      IdentificationResult restarted = linear;
+      restarted.solution = reselected;
+      RefineOptions second = options;
+      second.coarse_delay_search = false;
+      result = SolveEffects(restarted, reselected, result.effects, second);
+      result.reselected = reselected;
+    }
+  }
+  result.linear_criterion = linear_criterion;
+  result.refined_criterion = EffectCriterion(linear, result.effects);
+  result.relative_error_pct =
+      RelativeErrorWithEffects(linear.flights, NamedParameters(linear.system, result.refined.chi), result.effects);
   // Confounded effects: say how much.
   for (int a = 0; a < result.effect_correlation.rows(); ++a)
     for (int b = a + 1; b < result.effect_correlation.cols(); ++b)

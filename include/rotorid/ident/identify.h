@@ -51,6 +51,7 @@ struct FlightFit {
 };
 
 struct IdentificationResult {
+  IdentifyOptions options;  // as used
   std::vector<ProcessedFlight> flights;
   IdimSystem system;
   TlsSolution solution;

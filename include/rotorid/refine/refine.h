@@ -33,6 +33,11 @@ struct RefineOptions {
   int max_iterations = 100;
   bool compute_covariance = true;
   int num_threads = 1;
+  // After a first refinement, re-run the TLS (with its essential-parameter selection) on the rows
+  // corrected by the estimated effects, and refine again from there: parameters that the effects
+  // had made unidentifiable (a delay spoils the yaw equation, say) come back. Off: the linear
+  // step's discarded parameters stay fixed at zero.
+  bool reselect_essential = true;
 
   std::string Validate() const;
   bool Enabled(EffectKind kind) const;
@@ -49,7 +54,10 @@ struct SolverReport {
 };
 
 struct RefineResult {
-  TlsSolution refined;        // chi, covariance and std of the refined parameters; essential as linear
+  TlsSolution refined;        // chi, covariance and std of the refined parameters and which are essential
+  // The TLS on effect-corrected rows that started the final pass (when essential parameters were
+  // re-selected); its discarded list says what the refinement still cannot identify.
+  std::optional<TlsSolution> reselected;
   Effects effects;
   Effects effects_std;
   std::vector<EffectKind> enabled;
@@ -63,6 +71,9 @@ struct RefineResult {
   // Factor by which autocorrelated residuals inflate the parameter variance (already applied).
   double autocorrelation_factor = 1.0;
   SolverReport solver;
+  // The joint problem was rank-deficient: these parameters and effect coordinates span its null space.
+  bool rank_deficient = false;
+  std::vector<std::string> confounded;
   std::vector<std::string> warnings;
 };
 

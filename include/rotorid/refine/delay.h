@@ -1,0 +1,43 @@
+#pragma once
+
+// Command-to-IMU delay of a log: a global search of the TLS criterion over a wide range of delays
+// (so that the estimate cannot lock onto a wrong local minimum), then the joint refinement from
+// the best grid point, whose covariance gives the std.
+
+#include <vector>
+
+#include "rotorid/ident/identify.h"
+#include "rotorid/refine/refine.h"
+
+namespace rotorid {
+
+struct DelayOptions {
+  double min_s = -0.1;
+  double max_s = 0.2;
+  double step_s = 0.002;
+  // Estimate the motor time constant jointly (delay and lag are partly confounded).
+  bool with_motor_lag = false;
+  int num_threads = 2;
+
+  std::string Validate() const;
+};
+
+struct DelayEstimate {
+  double delay_s = 0.0;
+  double delay_std_s = 0.0;
+  double motor_tau_s = 0.0;
+  double motor_tau_std_s = 0.0;
+  double grid_best_s = 0.0;
+  std::vector<double> grid_s;
+  std::vector<double> criterion;   // TLS criterion at each grid delay
+  RefineResult refined;
+  std::vector<std::string> warnings;
+};
+
+DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options);
+
+// The TLS criterion at each delay (threads split the grid).
+std::vector<double> DelayCriterionCurve(const IdentificationResult& linear, const std::vector<double>& delays_s,
+                                        int num_threads);
+
+}  // namespace rotorid

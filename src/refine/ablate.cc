@@ -1,0 +1,72 @@
+#include "rotorid/refine/ablate.h"
+
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <thread>
+
+#include "rotorid/core/error.h"
+
+namespace rotorid {
+
+AblationResult Ablate(const IdentificationResult& linear, const std::vector<ProcessedFlight>& held_out,
+                      const std::vector<EffectKind>& effects, const RefineOptions& base, int num_threads,
+                      const std::function<void(int done, int total)>& on_done) {
+  if (effects.size() > 8) throw Error("ablation over more than 8 effects (256 refinements) is not supported");
+  if (const std::string problem = base.Validate(); !problem.empty()) throw Error(problem);
+  const int subsets = 1 << effects.size();
+  AblationResult out;
+  out.entries.resize(subsets);
+  std::atomic<int> next{0}, done{0};
+  std::mutex progress_mutex;
+  std::exception_ptr failure;
+  auto work = [&]() {
+    for (int s = next++; s < subsets; s = next++) {
+      try {
+        AblationEntry& entry = out.entries[s];
+        for (size_t k = 0; k < effects.size(); ++k)
+          if (s & (1 << k)) entry.effects.push_back(effects[k]);
+        RefineOptions options = base;
+        options.effects = entry.effects;
+        options.num_threads = 1;
+        options.compute_covariance = false;
+        entry.result = Refine(linear, options);
+        const auto values = NamedParameters(linear.system, entry.result.refined.chi);
+        entry.relative_error_pct = entry.result.relative_error_pct;
+        if (!held_out.empty())
+          entry.held_out_relative_error_pct = RelativeErrorWithEffects(held_out, values, entry.result.effects);
+        int free = 0;
+        for (bool e : linear.solution.essential) free += e;
+        for (EffectKind k : entry.effects) free += EffectDimension(k);
+        entry.num_parameters = free;
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+      const int finished = ++done;
+      if (on_done) {
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        on_done(finished, subsets);
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::max(1, std::min(num_threads, subsets)); ++t) pool.emplace_back(work);
+  for (std::thread& thread : pool) thread.join();
+  if (failure) std::rethrow_exception(failure);
+
+  // Information criteria on the whitened residuals, with the sample count divided by the
+  // autocorrelation factor of the effect-free fit so that every subset is charged alike.
+  const double rows = static_cast<double>(linear.system.w.rows());
+  const double factor = std::max(1.0, out.entries[0].result.autocorrelation_factor);
+  out.effective_samples = rows / factor;
+  for (AblationEntry& entry : out.entries) {
+    const double rss = std::max(2.0 * entry.result.solver.final_cost, 1e-300);
+    const double log_term = out.effective_samples * std::log(rss / rows);
+    entry.aic = log_term + 2.0 * entry.num_parameters;
+    entry.bic = log_term + entry.num_parameters * std::log(out.effective_samples);
+  }
+  return out;
+}
+
+}  // namespace rotorid
