@@ -387,17 +387,31 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   }
   RefineResult result = SolveEffects(linear, linear.solution, start, options);
   if (options.reselect_essential && !options.effects.empty()) {
-    // TLS on the effect-corrected rows, with the identification's own options, then a second pass.
-    IdimSystem corrected = linear.system;
-    corrected.w = SystemRowsWithEffects(linear, result.effects);
-    TlsSolution reselected = SolveIdim(corrected, linear.options.tls);
-    if (reselected.usable && reselected.essential != linear.solution.essential) {
+    // The TLS weights and equation-error variances of the linear step were fitted to the residual of
+    // the uncorrected rows (a delay inflates the yaw equation's error, say), and its essential set
+    // to their precision. Re-run the TLS, weights and selection included, on the rows corrected by
+    // the estimated effects, and refine again from there, until the effects settle.
+    Effects previous = result.effects;
+    for (int pass = 2; pass <= 4; ++pass) {
       IdentificationResult restarted = linear;
+      restarted.system.w = SystemRowsWithEffects(linear, result.effects);
+      TlsSolution reselected = SolveIdim(restarted.system, linear.options.tls);
+      if (!reselected.usable) break;
       restarted.solution = reselected;
-      RefineOptions second = options;
-      second.coarse_delay_search = false;
-      result = SolveEffects(restarted, reselected, result.effects, second);
-      result.reselected = reselected;
+      RefineOptions next = options;
+      next.coarse_delay_search = false;
+      RefineResult candidate = SolveEffects(restarted, reselected, result.effects, next);
+      candidate.reselected = reselected;
+      result = std::move(candidate);
+      // Settled when no effect coordinate moved by more than a tenth of its std.
+      bool settled = true;
+      for (EffectKind kind : options.effects) {
+        const Eigen::VectorXd change = (result.effects.Get(kind) - previous.Get(kind)).cwiseAbs();
+        const Eigen::VectorXd std_dev = result.effects_std.Get(kind);
+        for (Eigen::Index k = 0; k < change.size(); ++k) settled = settled && change[k] <= 0.1 * std_dev[k] + 1e-12;
+      }
+      if (settled) break;
+      previous = result.effects;
     }
   }
   result.linear_criterion = linear_criterion;
