@@ -3,6 +3,8 @@
 #include <fstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/io/column_map.h"
+#include "rotorid/io/crazyflie_flight.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/io/px4_flight.h"
 
@@ -29,6 +31,10 @@ FlightLog LoadFlightLog(const std::string& path, const Vehicle& vehicle, const F
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   switch (DetectLogFormat(path)) {
     case LogFormat::kCsv:
+      // Another tool's export: its columns and units come from the column map.
+      if (!options.column_map_path.empty()) {
+        return ReadMappedCsv(path, ReadColumnMap(options.column_map_path), vehicle.num_rotors(), options.rotor_signal);
+      }
       return ReadFlightCsv(path, vehicle.num_rotors());
     case LogFormat::kULog: {
       // docs/px4_ulog.md: measured esc_rpm when present ("auto"), else the motor commands.
@@ -37,8 +43,11 @@ FlightLog LoadFlightLog(const std::string& path, const Vehicle& vehicle, const F
       if (options.rotor_signal == "command") px4.rotor = Px4RotorSource::kCommand;
       return ReadPx4Flight(path, vehicle.num_rotors(), px4);
     }
-    case LogFormat::kCrazyflieUsd:
-      throw Error(path + ": Crazyflie micro-SD input is not available in this build yet");
+    case LogFormat::kCrazyflieUsd: {
+      CrazyflieFlightOptions crazyflie;
+      crazyflie.rotor_signal = options.rotor_signal;
+      return LoadCrazyflieFlight(path, vehicle.num_rotors(), crazyflie);
+    }
   }
   return {};
 }

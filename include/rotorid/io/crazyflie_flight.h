@@ -1,0 +1,48 @@
+#pragma once
+
+// A Crazyflie micro-SD log as one rotorid flight (INTERFACE.md conventions: FLU body, z-up
+// world, SI units). The Crazyflie body frame is already FLU, so only units change:
+//
+//   IMU          fixedFrequency: gyro.x/y/z (deg/s -> rad/s), acc.x/y/z (g -> m/s^2, x 9.80665)
+//   rotor signal measured speed rpm.m1..m4 (rev/min -> rad/s), or the PWM command
+//                pwm.m1_pwm..m4_pwm or motor.m1..m4 (0..65535 -> u = pwm/65535 in [0, 1],
+//                metadata `rotor_signal: command`)
+//   voltage      pm.vbatMV (mV -> V), else pm.vbat (V)
+//   mocap        estPose: locSrv.x/y/z (m) and locSrv.qx/qy/qz/qw, resampled onto the IMU
+//                times (linear for position, normalised linear for the quaternion), then as
+//                Bryant angles with roll and yaw unwrapped (continuous, may leave [-pi, pi])
+//
+// Rotor columns follow the firmware's motor order M1..M4; the vehicle file lists its rotors in
+// that order (data/vehicles/crazyflie21_*.yaml).
+
+#include <string>
+
+#include "rotorid/core/flight_log.h"
+#include "rotorid/io/crazyflie_usd.h"
+
+namespace rotorid {
+
+struct CrazyflieFlightOptions {
+  // "auto" (measured rpm when the log has rpm.m1..m4, else the command), "rpm" or "command".
+  // Default: "auto".
+  std::string rotor_signal = "auto";
+  // Event holding the IMU and rotor variables. Default: the firmware's "fixedFrequency".
+  std::string imu_event = "fixedFrequency";
+  // Event holding the motion-capture pose; absent from a log means no mocap. Default "estPose".
+  std::string pose_event = "estPose";
+  // Refuse a file whose CRC32 disagrees. Default: true.
+  bool verify_crc = true;
+
+  // Empty when valid, else what is wrong.
+  std::string Validate() const;
+};
+
+// The flight in a decoded log. `num_rotors` is the vehicle's rotor count (a Crazyflie has 4;
+// -1 accepts the log's 4). Throws rotorid::Error naming the file and, for missing variables,
+// the names looked for and the event's variables.
+FlightLog CrazyflieUsdToFlight(const CrazyflieUsdLog& log, int num_rotors = -1,
+                               const CrazyflieFlightOptions& options = {});
+// Reads and maps a uSD log file.
+FlightLog LoadCrazyflieFlight(const std::string& path, int num_rotors = -1, const CrazyflieFlightOptions& options = {});
+
+}  // namespace rotorid
