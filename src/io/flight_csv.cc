@@ -122,6 +122,7 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
     return *k;
   };
   const int t_col = require("t");
+  for (const char* name : {"gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"}) require(name);
   const int n = static_cast<int>(data[t_col].size());
   if (n < kMinFlightSamples)
     throw Error(source + ": too few samples (" + std::to_string(n) + "); at least " +
