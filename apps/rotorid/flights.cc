@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <iomanip>
 #include <sstream>
 #include <iostream>
@@ -111,10 +112,12 @@ std::string FormatComponents(const std::vector<std::optional<double>>& values) {
 }
 
 void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution) {
-  out << std::left << std::setw(12) << "parameter" << std::right << std::setw(14) << "value" << std::setw(12) << "std"
+  size_t width = 10;
+  for (const std::string& n : names) width = std::max(width, n.size() + 2);
+  out << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(14) << "value" << std::setw(12) << "std"
       << std::setw(10) << "%sigma" << "  essential\n";
   for (size_t k = 0; k < names.size(); ++k) {
-    out << std::left << std::setw(12) << names[k] << std::right << std::scientific << std::setprecision(4)
+    out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific << std::setprecision(4)
         << std::setw(14) << solution.chi[k] << std::setprecision(2) << std::setw(12) << solution.std[k] << std::fixed
         << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[k] << "  "
         << (solution.essential[k] ? "yes" : "no (discarded)") << "\n";

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <algorithm>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -16,11 +17,13 @@ namespace {
 void PrintSideBySide(const IdentificationResult& linear, const RefineResult& refined) {
   const TlsSolution& a = linear.solution;
   const TlsSolution& b = refined.refined;
-  std::cout << std::left << std::setw(12) << "parameter" << std::right << std::setw(13) << "linear" << std::setw(10)
+  size_t width = 10;
+  for (const std::string& n : linear.system.parameter_names) width = std::max(width, n.size() + 2);
+  std::cout << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(13) << "linear" << std::setw(10)
             << "std" << std::setw(13) << "refined" << std::setw(10) << "std" << std::setw(10) << "change/std"
             << "\n";
   for (int k = 0; k < linear.system.num_parameters(); ++k) {
-    std::cout << std::left << std::setw(12) << linear.system.parameter_names[k] << std::right << std::scientific
+    std::cout << std::left << std::setw(static_cast<int>(width)) << linear.system.parameter_names[k] << std::right << std::scientific
               << std::setprecision(4) << std::setw(13) << a.chi[k] << std::setprecision(1) << std::setw(10) << a.std[k]
               << std::setprecision(4) << std::setw(13) << b.chi[k] << std::setprecision(1) << std::setw(10) << b.std[k];
     if (a.essential[k] && a.std[k] > 0)

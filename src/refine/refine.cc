@@ -26,6 +26,8 @@ std::string RefineOptions::Validate() const {
   if (max_iterations < 1) return "max_iterations must be at least 1";
   if (initial.motor_tau_s < 0.0) return "initial motor_tau_s must not be negative";
   if (num_threads < 1) return "num_threads must be at least 1";
+  if (!(max_motor_tau_s > 0.0) || !(max_acc_bias_mps2 > 0.0) || !(max_gyro_bias_radps > 0.0))
+    return "effect bounds must be positive";
   return {};
 }
 
@@ -253,6 +255,15 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   }
   problem.SetManifold(misalignment.data(), new ceres::EigenQuaternionManifold);
   problem.SetParameterLowerBound(&tau, 0, 0.0);
+  problem.SetParameterUpperBound(&tau, 0, options.max_motor_tau_s);
+  problem.SetParameterLowerBound(&delay, 0, options.delay_search_min_s);
+  problem.SetParameterUpperBound(&delay, 0, options.delay_search_max_s);
+  for (int a = 0; a < 3; ++a) {
+    problem.SetParameterLowerBound(acc_bias.data(), a, -options.max_acc_bias_mps2);
+    problem.SetParameterUpperBound(acc_bias.data(), a, options.max_acc_bias_mps2);
+    problem.SetParameterLowerBound(gyro_bias.data(), a, -options.max_gyro_bias_radps);
+    problem.SetParameterUpperBound(gyro_bias.data(), a, options.max_gyro_bias_radps);
+  }
   if (!options.Enabled(EffectKind::kDelay)) problem.SetParameterBlockConstant(&delay);
   if (!options.Enabled(EffectKind::kMotorLag)) problem.SetParameterBlockConstant(&tau);
   if (!options.Enabled(EffectKind::kAccBias)) problem.SetParameterBlockConstant(acc_bias.data());
@@ -414,6 +425,25 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       previous = result.effects;
     }
   }
+  // Estimates on a bound are not estimates.
+  auto at_bound = [](double v, double lo, double hi) { return v <= lo + 1e-9 * (hi - lo) || v >= hi - 1e-9 * (hi - lo); };
+  std::vector<std::string> bounded;
+  if (options.Enabled(EffectKind::kDelay) &&
+      at_bound(result.effects.delay_s, options.delay_search_min_s, options.delay_search_max_s))
+    bounded.push_back("delay_s");
+  if (options.Enabled(EffectKind::kMotorLag) && result.effects.motor_tau_s >= options.max_motor_tau_s * (1 - 1e-9))
+    bounded.push_back("motor_tau_s");
+  for (int a = 0; a < 3; ++a) {
+    if (options.Enabled(EffectKind::kAccBias) &&
+        std::abs(result.effects.acc_bias[a]) >= options.max_acc_bias_mps2 * (1 - 1e-9))
+      bounded.push_back("acc_bias");
+    if (options.Enabled(EffectKind::kGyroBias) &&
+        std::abs(result.effects.gyro_bias[a]) >= options.max_gyro_bias_radps * (1 - 1e-9))
+      bounded.push_back("gyro_bias");
+  }
+  for (const std::string& name : bounded)
+    result.warnings.push_back(name + " ended on the bound of its physical range: these flights do not determine it "
+                              "(or the residual has a cause outside the modelled effects); do not trust it");
   result.linear_criterion = linear_criterion;
   result.refined_criterion = EffectCriterion(linear, result.effects);
   result.relative_error_pct =

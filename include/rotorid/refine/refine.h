@@ -30,6 +30,11 @@ struct RefineOptions {
   // Robust loss on the whitened residuals: "none", "huber" or "cauchy", with its scale.
   std::string robust_loss = "none";
   double robust_scale = 3.0;
+  // Physical ranges the effects are kept in (beyond them the model is not what is wrong); an
+  // estimate that ends on a bound is reported as such. The delay is kept in the search range.
+  double max_motor_tau_s = 0.3;
+  double max_acc_bias_mps2 = 2.0;
+  double max_gyro_bias_radps = 0.2;
   int max_iterations = 100;
   bool compute_covariance = true;
   int num_threads = 1;
