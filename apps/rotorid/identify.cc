@@ -2,6 +2,8 @@
 #include <memory>
 
 #include "commands.h"
+#include "rotorid/refine/refine.h"
+#include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 
 namespace rotorid::cli {
@@ -22,13 +24,22 @@ Command AddIdentifyCommand(CLI::App& root) {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const std::vector<FlightData> flights = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
     const IdentificationResult result = Identify(flights, identify);
-    if (!options->flights.json_path.empty()) {
-      nlohmann::json report = {{"rotorid_version", kRotoridVersion},
-                               {"command", "identify"},
-                               {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
-                                             {"tls", TlsOptionsJson(identify.tls)}}},
-                               {"linear", LinearJson(result)}};
-      WriteJsonFile(options->flights.json_path, report);
+    const nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                                   {"command", "identify"},
+                                   {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
+                                                 {"tls", TlsOptionsJson(identify.tls)}}},
+                                   {"linear", LinearJson(result)}};
+    if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    std::string report_path;
+    if (!options->flights.report_dir.empty()) {
+      ReportInput input;
+      input.title = "rotorid identify";
+      input.report = report;
+      input.flights = ReportFlights(result.flights, /*held_out=*/false);
+      input.parameter_sets = {{"linear", NamedParameters(result.system, result.solution.chi), Effects()}};
+      ReportOptions report_options;
+      report_options.print_warnings = !options->flights.quiet;
+      report_path = WriteHtmlReport(options->flights.report_dir, input, report_options).html_path;
     }
     if (!options->flights.quiet) {
       std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "
@@ -37,6 +48,7 @@ Command AddIdentifyCommand(CLI::App& root) {
       PrintParameterTable(std::cout, result.system.parameter_names, result.solution);
       std::cout << "relative error (paper Table III): " << FormatComponents(result.relative_error_pct) << "\n";
       PrintWarnings(result.warnings);
+      if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
     return 0;
   };

@@ -2,6 +2,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 
 namespace rotorid::cli {
@@ -47,13 +48,28 @@ Command AddValidateCommand(CLI::App& root) {
       fits.push_back(FitFlight(f, values));
       per_flight.push_back(FlightFitJson(fits.back()));
     }
-    if (!options->flights.json_path.empty()) {
-      WriteJsonFile(options->flights.json_path, {{"rotorid_version", kRotoridVersion},
-                                                 {"command", "validate"},
-                                                 {"params", options->params_path},
-                                                 {"settings", {{"observation", ObservationOptionsJson(observation)}}},
-                                                 {"relative_error_pct", ComponentsJson(combined)},
-                                                 {"flights", per_flight}});
+    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                             {"command", "validate"},
+                             {"params", options->params_path},
+                             {"settings", {{"observation", ObservationOptionsJson(observation)}}},
+                             {"relative_error_pct", ComponentsJson(combined)},
+                             {"flights", per_flight}};
+    if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    std::string report_path;
+    if (!options->flights.report_dir.empty()) {
+      ReportInput input;
+      input.title = "rotorid validate";
+      input.report = report;
+      // The saved parameters (and the refined effects) go into the report's parameter table.
+      for (const char* block : {"linear", "refined"})
+        for (const char* key : {"parameters", "effects"})
+          if (params.contains(block) && params[block].is_object() && params[block].contains(key))
+            input.report[block][key] = params[block][key];
+      input.flights = ReportFlights(flights, /*held_out=*/true);
+      input.parameter_sets = ParameterSetsFromReport(params);
+      ReportOptions report_options;
+      report_options.print_warnings = !options->flights.quiet;
+      report_path = WriteHtmlReport(options->flights.report_dir, input, report_options).html_path;
     }
     if (!options->flights.quiet) {
       std::cout << "rotorid validate: parameters of " << options->params_path << " on " << flights.size()
@@ -62,6 +78,7 @@ Command AddValidateCommand(CLI::App& root) {
         std::cout << "  " << fit.source << " (" << fit.config << "): " << FormatComponents(fit.relative_error_pct)
                   << "\n";
       std::cout << "relative error (paper Table III): " << FormatComponents(combined) << "\n";
+      if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
     return 0;
   };

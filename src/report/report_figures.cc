@@ -1,0 +1,419 @@
+#include "report/report_figures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "report/gnuplot.h"
+#include "rotorid/model/parameters.h"
+
+namespace rotorid::internal {
+
+namespace {
+
+constexpr const char* kPalette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"};
+constexpr int kPaletteSize = sizeof(kPalette) / sizeof(kPalette[0]);
+// The paper's Fig. 3/4 colours: rigid body blue, rotor model red; the error gets its own axis.
+constexpr const char* kRigidBodyColour = "#1f77b4";
+constexpr const char* kRotorModelColour = "#d62728";
+constexpr const char* kErrorColour = "#2ca02c";
+constexpr const char* kMarkColour = "#fde2e1";
+
+const char* Colour(size_t k) { return kPalette[k % kPaletteSize]; }
+
+const char* Unit(int component) { return component < 3 ? "N" : "N m"; }
+
+std::string Num(double v) {
+  if (!std::isfinite(v)) return "NaN";
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.6g", v);
+  return buffer;
+}
+
+std::string Num(const std::optional<double>& v) { return v ? Num(*v) : "NaN"; }
+
+std::string Fixed(double v, int digits) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, v);
+  return buffer;
+}
+
+// A data-file string token (xtic labels): no spaces or quotes, so it needs no escaping.
+std::string Token(const std::string& text) {
+  std::string quoted = GnuplotString(text);
+  std::string out = quoted.substr(1, quoted.size() - 2);
+  std::replace(out.begin(), out.end(), ' ', '_');
+  return "\"" + (out.empty() ? std::string("_") : out) + "\"";
+}
+
+bool AnyFinite(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (std::isfinite(v[i])) return true;
+  return false;
+}
+
+bool AnyPositive(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (std::isfinite(v[i]) && v[i] > 0.0) return true;
+  return false;
+}
+
+// gnuplot stops a script at "all points undefined": an empty panel gets a note instead of a plot.
+std::string EmptyPanel(const std::string& note) {
+  return "set yrange [0:1]\nset xrange [0:1]\nunset logscale y\nset label 99 " + GnuplotString(note) +
+         " at graph 0.5, graph 0.5 center\nplot 2 notitle\nunset label 99\nset autoscale\n";
+}
+
+// A multiplot grid with margins and gaps fixed in pixels, so that the axes of every panel line up
+// and the page title gets room of its own.
+std::string MultiplotGrid(const FigureSpec& f, int rows, int cols, const std::string& title, int left_px, int right_px,
+                          int bottom_px, int top_px, int column_gap_px, int row_gap_px) {
+  const double w = f.width_px, h = f.height_px;
+  return "set multiplot layout " + std::to_string(rows) + "," + std::to_string(cols) +
+         (title.empty() ? std::string() : " title " + GnuplotString(title) + " font ',13'") + " margins " +
+         Num(left_px / w) + "," + Num(1.0 - right_px / w) + "," + Num(bottom_px / h) + "," + Num(1.0 - top_px / h) +
+         " spacing " + Num(column_gap_px / w) + "," + Num(row_gap_px / h) + "\n";
+}
+
+// A legend entry drawn at screen coordinates (x, y): a short coloured line and its text.
+std::string ScreenLegend(int id, double x, double y, const char* colour, const std::string& text) {
+  return "set arrow " + std::to_string(id) + " from screen " + Num(x) + ", screen " + Num(y) + " to screen " +
+         Num(x + 0.025) + ", screen " + Num(y) + " nohead lw 2.5 lc rgb '" + colour + "'\nset label " +
+         std::to_string(id) + " " + GnuplotString(text) + " at screen " + Num(x + 0.03) + ", screen " + Num(y) +
+         " left font ',11'\n";
+}
+
+void AppendBlock(std::string* out, const Eigen::VectorXd& x, const Eigen::VectorXd& y, int max_points) {
+  for (const Eigen::Index i : DecimationIndices(y, max_points)) {
+    *out += Num(x[i]);
+    *out += ' ';
+    *out += Num(y[i]);
+    *out += '\n';
+  }
+  *out += "\n\n";  // gnuplot: two blank lines end an "index" block
+}
+
+}  // namespace
+
+std::vector<Eigen::Index> DecimationIndices(const Eigen::VectorXd& values, int max_points) {
+  const Eigen::Index n = values.size();
+  std::vector<Eigen::Index> out;
+  if (n <= std::max(max_points, 2)) {
+    out.resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) out[i] = i;
+    return out;
+  }
+  const Eigen::Index buckets = std::max(max_points / 2, 1);
+  out.reserve(2 * buckets);
+  for (Eigen::Index b = 0; b < buckets; ++b) {
+    const Eigen::Index begin = b * n / buckets, end = (b + 1) * n / buckets;
+    Eigen::Index lo = begin, hi = begin;
+    for (Eigen::Index i = begin; i < end; ++i) {
+      if (!(values[i] >= values[lo])) lo = i;  // NaN-tolerant: a NaN never wins
+      if (!(values[i] <= values[hi])) hi = i;
+    }
+    out.push_back(std::min(lo, hi));
+    if (lo != hi) out.push_back(std::max(lo, hi));
+  }
+  return out;
+}
+
+std::string ScriptHead(const FigureSpec& figure, const std::string& output_path_quoted) {
+  return "set terminal svg size " + std::to_string(figure.width_px) + "," + std::to_string(figure.height_px) +
+         " dynamic noenhanced font 'Helvetica,11' background '#ffffff'\n"
+         "set encoding utf8\n"
+         "set output " +
+         output_path_quoted +
+         "\n"
+         "set border lc rgb '#555555'\n"
+         "set grid lt 1 lc rgb '#e4e4e4' lw 1\n"
+         "set key noopaque samplen 1.5 spacing 1.0 font ',9'\n";
+}
+
+FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label,
+                        const std::vector<WrenchColumn>& columns, const std::vector<TimeMark>& marks,
+                        int max_points_per_series) {
+  FigureSpec f;
+  f.name = name;
+  const int num_columns = std::max<int>(1, static_cast<int>(columns.size()));
+  // Time series want width: one column still gets 900 px.
+  f.width_px = std::max(900, 560 * num_columns);
+  f.height_px = 150 + 185 * 6;
+  std::string& body = f.body;
+  body += MultiplotGrid(f, 6, num_columns, flight_label, 85, 85, 45, 105, 170, 60);
+  body += "set ytics nomirror\nset y2tics nomirror tc rgb '" + std::string(kErrorColour) + "'\nunset key\n";
+  // One legend for the page, under its title; drawn with the first panel, then removed.
+  const double legend_y = 1.0 - 52.0 / f.height_px;
+  body += ScreenLegend(101, 0.14, legend_y, kRigidBodyColour, "rigid body (IMU): m D_m + D chi");
+  body += ScreenLegend(102, 0.42, legend_y, kRotorModelColour, "rotor model: D_k chi_k");
+  body += ScreenLegend(103, 0.70, legend_y, kErrorColour, "error (right axis)");
+  const std::string remove_legend =
+      "unset arrow 101\nunset arrow 102\nunset arrow 103\nunset label 101\nunset label 102\nunset label 103\n";
+  int block = 0;
+  auto panel = [&](int row, const WrenchColumn& column) -> std::string {
+    const int component = kPanelOrder[row];
+    std::string title = std::string(kWrenchComponentNames[component]) + " (" + Unit(component) + "), " + column.label;
+    std::string text = "unset object\n";
+    if (!column.split || column.split->t_s.size() == 0)
+      return text + "set title " + GnuplotString(title) + " font ',10'\n" + EmptyPanel("no parameters for this flight");
+    const WrenchSplit& split = *column.split;
+    if (split.relative_error_pct[component])
+      title += ": error " + Fixed(*split.relative_error_pct[component], 1) + " % of rotor wrench";
+    text += "set title " + GnuplotString(title) + " font ',10'\n";
+    const Eigen::VectorXd rigid = split.rigid_body.col(component), rotor = split.rotor_model.col(component),
+                          error = split.error.col(component);
+    if (!AnyFinite(rigid) && !AnyFinite(rotor) && !AnyFinite(error)) return text + EmptyPanel("no finite values");
+    text += "set xrange [" + Num(split.t_s[0]) + ":" + Num(split.t_s[split.t_s.size() - 1]) + "]\n";
+    int object = 1;
+    for (const TimeMark& mark : marks)
+      text += "set object " + std::to_string(object++) + " rect from first " + Num(mark.start_s) +
+              ", graph 0 to first " + Num(mark.end_s) + ", graph 1 behind fc rgb '" + kMarkColour +
+              "' fs solid 1.0 noborder\n";
+    text += "set ylabel " + GnuplotString(Unit(component)) + "\n";
+    text += "set y2label " + GnuplotString(std::string("error (") + Unit(component) + ")") + " tc rgb '" +
+            kErrorColour + "'\n";
+    text += row == 5 ? "set xlabel 't (s)'\n" : "unset xlabel\n";
+    AppendBlock(&f.data, split.t_s, rigid, max_points_per_series);
+    AppendBlock(&f.data, split.t_s, rotor, max_points_per_series);
+    AppendBlock(&f.data, split.t_s, error, max_points_per_series);
+    // The error first, so that the two wrenches are drawn over it.
+    text += "plot $DATA index " + std::to_string(block + 2) + " using 1:2 axes x1y2 with lines lw 0.8 lc rgb '" +
+            kErrorColour + "' title 'error', $DATA index " + std::to_string(block) +
+            " using 1:2 with lines lw 1.2 lc rgb '" + kRigidBodyColour + "' title 'rigid body', $DATA index " +
+            std::to_string(block + 1) + " using 1:2 with lines lw 1.2 lc rgb '" + kRotorModelColour +
+            "' title 'rotor model'\n";
+    block += 3;
+    return text;
+  };
+  for (int row = 0; row < 6; ++row)
+    for (size_t c = 0; c < columns.size(); ++c) {
+      body += panel(row, columns[c]);
+      if (row == 0 && c == 0) body += remove_legend;
+    }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec SpectrumFigure(const std::string& name, const std::string& group_label,
+                          const std::vector<SpectrumCurve>& curves, std::optional<double> cutoff_hz,
+                          const std::vector<std::pair<double, double>>& bands_hz) {
+  FigureSpec f;
+  f.name = name;
+  f.width_px = 1100;
+  f.height_px = 60 + 3 * 290;
+  std::string& body = f.body;
+  body += MultiplotGrid(f, 3, 2, "Residual amplitude spectra, " + group_label + " (Welch, Hann windows, 50 % overlap)",
+                        95, 25, 50, 60, 120, 95);
+  body += "set xlabel 'frequency (Hz)'\nset format y '%.0e'\nset key top right\n";
+  if (cutoff_hz)
+    body += "set arrow 1 from first " + Num(*cutoff_hz) + ", graph 0 to first " + Num(*cutoff_hz) +
+            ", graph 1 nohead dt 2 lc rgb '#888888'\nset label 1 'low-pass cut-off' at first " + Num(*cutoff_hz) +
+            ", graph 0.95 right offset -0.5,0 font ',8' tc rgb '#777777'\n";
+  int object = 1;
+  for (const auto& [low, high] : bands_hz)
+    body += "set object " + std::to_string(object++) + " rect from first " + Num(low) + ", graph 0 to first " +
+            Num(high) + ", graph 1 behind fc rgb '" + kMarkColour + "' fs solid 1.0 noborder\n";
+  int block = 0;
+  for (int panel = 0; panel < 6; ++panel) {
+    const int component = kPanelOrder[panel];
+    body += "set title " + GnuplotString(std::string(kWrenchComponentNames[component]) + " residual") + " font ',10'\n";
+    body += "set ylabel " + GnuplotString(std::string(Unit(component)) + "/sqrt(Hz)") + "\n";
+    std::string plot;
+    for (size_t k = 0; k < curves.size(); ++k) {
+      const SpectrumCurve& curve = curves[k];
+      if (curve.frequency_hz.size() < 2 || !AnyPositive(curve.asd.col(component))) continue;
+      // Skip DC: the mean was removed, and a log axis cannot show zero.
+      for (Eigen::Index i = 1; i < curve.frequency_hz.size(); ++i) {
+        const double v = curve.asd(i, component);
+        f.data += Num(curve.frequency_hz[i]) + " " + (v > 0.0 ? Num(v) : std::string("NaN")) + "\n";
+      }
+      f.data += "\n\n";
+      plot += std::string(plot.empty() ? "plot " : ", ") + "$DATA index " + std::to_string(block++) +
+              " using 1:2 with lines lw 1.3 lc rgb '" + Colour(k) + "' title " + GnuplotString(curve.label);
+    }
+    if (plot.empty()) {
+      body += EmptyPanel("no residual");
+      continue;
+    }
+    body += "set logscale y\nset autoscale\n" + plot + "\n";
+  }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec ParameterFigure(const std::string& name, const std::vector<std::string>& set_labels,
+                           const std::vector<ParameterPoint>& points) {
+  FigureSpec f;
+  f.name = name;
+  f.width_px = std::max(700, 140 + 60 * static_cast<int>(points.size()));
+  f.height_px = 480;
+  const size_t sets = set_labels.size();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const ParameterPoint& p = points[i];
+    const double reference = p.value.empty() || !p.value[0] ? NAN : *p.value[0];
+    f.data += std::to_string(i) + " " + Token(p.name);
+    for (size_t k = 0; k < sets; ++k) {
+      // NaN stands for "absent": gnuplot skips the point (value) or draws no bar (std).
+      const double v = k < p.value.size() ? p.value[k].value_or(NAN) : NAN;
+      const double s = k < p.std.size() ? p.std[k].value_or(0.0) : 0.0;
+      f.data += " " + Num(v / reference) + " " + Num(3.0 * s / std::abs(reference));
+    }
+    f.data += "\n";
+  }
+  std::string& body = f.body;
+  body += "set title 'Parameter estimates +- 3 std, divided by the " +
+          (sets ? GnuplotString(set_labels[0]).substr(1, GnuplotString(set_labels[0]).size() - 2) : std::string()) +
+          " estimate' font ',12'\n";
+  body += "set lmargin 12\nset bmargin 5\n";
+  body += "set xtics rotate by -40 nomirror font ',10'\nset ytics nomirror\n";
+  body += "set xrange [-0.7:" + Num(static_cast<double>(points.size()) - 0.3) + "]\n";
+  body += "set ylabel 'estimate / reference'\nset key top right\n";
+  body += "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 3 lc rgb '#888888'\n";
+  if (points.empty()) {
+    body += EmptyPanel("no essential parameters");
+    return f;
+  }
+  body += "plot ";
+  for (size_t k = 0; k < sets; ++k) {
+    const double offset = sets > 1 ? -0.15 + 0.3 * static_cast<double>(k) / static_cast<double>(sets - 1) : 0.0;
+    const int value_column = 3 + 2 * static_cast<int>(k);
+    body += std::string(k ? ", " : "") + "$DATA using ($1+(" + Num(offset) + ")):" + std::to_string(value_column) +
+            ":" + std::to_string(value_column + 1) + (k == 0 ? ":xtic(2)" : "") +
+            " with yerrorbars pt 7 ps 0.7 lw 1.3 lc rgb '" + Colour(k) + "' title " + GnuplotString(set_labels[k]);
+  }
+  body += "\n";
+  return f;
+}
+
+namespace {
+
+// Components with at least one value in any of the rows.
+std::vector<int> UsedComponents(const std::vector<const std::vector<std::optional<double>>*>& rows) {
+  std::vector<int> used;
+  for (const int j : kPanelOrder) {
+    bool any = false;
+    for (const auto* r : rows)
+      if (j < static_cast<int>(r->size()) && (*r)[j]) any = true;
+    if (any) used.push_back(j);
+  }
+  return used;
+}
+
+std::string HistogramStyle() {
+  return "set style data histograms\nset style histogram clustered gap 1\n"
+         "set style fill solid 0.85 noborder\nset boxwidth 0.9\nset yrange [0:*]\nset xtics nomirror\n";
+}
+
+}  // namespace
+
+FigureSpec DiagnosisFigure(const std::string& name, const std::vector<GapSeries>& gaps,
+                           const std::vector<RankedEffect>& ranking) {
+  FigureSpec f;
+  f.name = name;
+  std::vector<const std::vector<std::optional<double>>*> rows;
+  for (const GapSeries& g : gaps) rows.push_back(&g.per_component);
+  const std::vector<int> components = UsedComponents(rows);
+  const bool draw_gaps = !components.empty() && !gaps.empty();
+  bool draw_ranking = false;
+  for (const RankedEffect& r : ranking) draw_ranking = draw_ranking || r.shrink_pct.has_value();
+  const int panels = (draw_gaps ? 1 : 0) + (draw_ranking ? 1 : 0);
+  f.width_px = panels == 2 ? 1150 : 700;
+  f.height_px = 440;
+  std::string& body = f.body;
+  if (panels == 0) {
+    body += EmptyPanel("no diagnosis values");
+    return f;
+  }
+  body += MultiplotGrid(f, 1, panels, "", 85, 30, 80, 40, 110, 0);
+  int block = 0;
+  if (draw_gaps) {
+    for (const int j : components) {
+      f.data += std::string("\"") + kWrenchComponentNames[j] + "\"";
+      for (const GapSeries& g : gaps)
+        f.data += " " + Num(j < static_cast<int>(g.per_component.size()) ? g.per_component[j] : std::nullopt);
+      f.data += "\n";
+    }
+    f.data += "\n\n";
+    body += HistogramStyle();
+    body += "set title 'Held-out gap per component (relative error, %)' font ',11'\n";
+    body += "set ylabel '||rho|| / ||rotor wrench|| (%)'\nset key top right\n";
+    body += "plot ";
+    for (size_t k = 0; k < gaps.size(); ++k)
+      body += std::string(k ? ", " : "") + "$DATA index " + std::to_string(block) + " using " + std::to_string(k + 2) +
+              (k == 0 ? ":xtic(1)" : "") + " lc rgb '" + Colour(k) + "' title " + GnuplotString(gaps[k].label);
+    body += "\n";
+    ++block;
+  }
+  if (draw_ranking) {
+    int i = 0;
+    for (const RankedEffect& r : ranking) {
+      if (!r.shrink_pct) continue;
+      // Significant effects green, the rest grey: "lc rgb variable" reads the colour as an integer.
+      f.data += std::to_string(i++) + " " + Token(r.effect) + " " + Num(*r.shrink_pct) + " " +
+                std::to_string(r.significant ? 0x2ca02c : 0xb0b0b0) + "\n";
+    }
+    f.data += "\n\n";
+    body += "set style data boxes\nset style fill solid 0.85 noborder\nset boxwidth 0.6\nset autoscale y\n";
+    body += "set xrange [-0.6:" + std::to_string(i) + "-0.4]\nset xtics rotate by -30 nomirror\n";
+    body += "set title 'Effects ranked: held-out gap removed (%); green = significant' font ',11'\n";
+    body += "set ylabel 'shrink (%)'\nunset key\n";
+    body += "set arrow 2 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#555555'\n";
+    body += "plot $DATA index " + std::to_string(block) + " using 1:3:4:xtic(2) with boxes lc rgb variable notitle, " +
+            "$DATA index " + std::to_string(block) +
+            " using 1:3:(sprintf('%.1f', $3)) with labels offset 0, char 0.7 font ',9' notitle\n";
+  }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec AblationFigure(const std::string& name, const std::vector<AblationRow>& rows) {
+  FigureSpec f;
+  f.name = name;
+  std::vector<const std::vector<std::optional<double>>*> ident, held;
+  for (const AblationRow& r : rows) {
+    ident.push_back(&r.identification);
+    if (!r.held_out.empty()) held.push_back(&r.held_out);
+  }
+  const std::vector<int> ident_components = UsedComponents(ident), held_components = UsedComponents(held);
+  struct Panel {
+    std::string title;
+    std::vector<int> components;
+    bool held_out;
+  };
+  std::vector<Panel> panels;
+  if (!ident_components.empty()) panels.push_back({"identification flights", ident_components, false});
+  if (!held_components.empty()) panels.push_back({"held-out flights", held_components, true});
+  f.width_px =
+      std::max(700, std::min(1400, 200 + 90 * static_cast<int>(rows.size()) * static_cast<int>(panels.size())));
+  f.height_px = 480;
+  std::string& body = f.body;
+  if (panels.empty()) {
+    body += EmptyPanel("no ablation values");
+    return f;
+  }
+  body += MultiplotGrid(f, 1, static_cast<int>(panels.size()), "", 85, 30, 110, 40, 100, 0);
+  body += HistogramStyle() + "set xtics rotate by -35 font ',9'\nset key top right\n";
+  body += "set ylabel 'relative error (%)'\n";
+  for (size_t p = 0; p < panels.size(); ++p) {
+    for (const AblationRow& r : rows) {
+      const std::vector<std::optional<double>>& values = panels[p].held_out ? r.held_out : r.identification;
+      f.data += Token(r.label);
+      for (const int j : panels[p].components)
+        f.data += " " + Num(j < static_cast<int>(values.size()) ? values[j] : std::nullopt);
+      f.data += "\n";
+    }
+    f.data += "\n\n";
+    body +=
+        "set title " + GnuplotString("Ablation: relative error per component, " + panels[p].title) + " font ',11'\n";
+    body += "plot ";
+    for (size_t k = 0; k < panels[p].components.size(); ++k)
+      body += std::string(k ? ", " : "") + "$DATA index " + std::to_string(p) + " using " + std::to_string(k + 2) +
+              (k == 0 ? ":xtic(1)" : "") + " lc rgb '" + Colour(k) + "' title '" +
+              kWrenchComponentNames[panels[p].components[k]] + "'";
+    body += "\n";
+  }
+  body += "unset multiplot\n";
+  return f;
+}
+
+}  // namespace rotorid::internal

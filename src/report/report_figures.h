@@ -1,0 +1,94 @@
+#pragma once
+
+// The report's figures as gnuplot scripts plus their data (internal to the report module).
+// Every builder returns a script that reads one data file, given as an already quoted gnuplot
+// string, and leaves terminal and output to the caller.
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rotorid/report/wrench_split.h"
+
+namespace rotorid::internal {
+
+struct FigureSpec {
+  std::string name;     // file name without ".svg", e.g. "fig_wrench_1"
+  std::string title;    // heading in the report
+  std::string caption;  // plain text; how to read it
+  int width_px = 1000;
+  int height_px = 600;
+  std::string data;  // content of the data file
+  std::string body;  // gnuplot commands; "$DATA" stands for the quoted data file path
+};
+
+// One column of the wrench figure: a parameter set's split on the flight (nullopt: no values).
+struct WrenchColumn {
+  std::string label;
+  std::optional<WrenchSplit> split;
+};
+
+// A time interval to shade on the time axes.
+struct TimeMark {
+  double start_s = 0.0;
+  double end_s = 0.0;
+  std::string label;
+};
+
+// Order of the panels: the components the paper draws first, then the lateral forces.
+inline constexpr int kPanelOrder[6] = {2, 3, 4, 5, 0, 1};
+
+// Figure (a): rows = wrench components, columns = parameter sets.
+FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label,
+                        const std::vector<WrenchColumn>& columns, const std::vector<TimeMark>& marks,
+                        int max_points_per_series);
+
+// Figure (b): residual amplitude spectra; one curve per parameter set (and series) per component.
+struct SpectrumCurve {
+  std::string label;
+  Eigen::VectorXd frequency_hz;
+  Eigen::MatrixXd asd;  // bins x 6
+};
+FigureSpec SpectrumFigure(const std::string& name, const std::string& group_label,
+                          const std::vector<SpectrumCurve>& curves, std::optional<double> cutoff_hz,
+                          const std::vector<std::pair<double, double>>& bands_hz);
+
+// Figure (c): parameters +- 3 std normalised by the reference (first) set.
+struct ParameterPoint {
+  std::string name;
+  std::vector<std::optional<double>> value;  // per set
+  std::vector<std::optional<double>> std;    // per set
+};
+FigureSpec ParameterFigure(const std::string& name, const std::vector<std::string>& set_labels,
+                           const std::vector<ParameterPoint>& points);
+
+// Figure (d1): the diagnosis: gap per component (bars per stage), and the ranking of effects.
+struct GapSeries {
+  std::string label;                                 // "baseline", "+ delay", "final"
+  std::vector<std::optional<double>> per_component;  // 6
+};
+struct RankedEffect {
+  std::string effect;
+  std::optional<double> shrink_pct;
+  bool significant = false;
+};
+FigureSpec DiagnosisFigure(const std::string& name, const std::vector<GapSeries>& gaps,
+                           const std::vector<RankedEffect>& ranking);
+
+// Figure (d2): the ablation table: per configuration of effects, the gap per component.
+struct AblationRow {
+  std::string label;
+  std::vector<std::optional<double>> identification;  // 6
+  std::vector<std::optional<double>> held_out;        // 6 (empty when absent)
+};
+FigureSpec AblationFigure(const std::string& name, const std::vector<AblationRow>& rows);
+
+// The common head of every script: SVG terminal and output file.
+std::string ScriptHead(const FigureSpec& figure, const std::string& output_path_quoted);
+
+// Min/max decimation to at most max_points (keeps the envelope and the peaks).
+std::vector<Eigen::Index> DecimationIndices(const Eigen::VectorXd& values, int max_points);
+
+}  // namespace rotorid::internal
