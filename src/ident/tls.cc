@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include <Eigen/Dense>
@@ -94,6 +95,9 @@ std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, co
 
 namespace {
 
+// Below this, the unit solution vector's last entry cannot fix the scale.
+constexpr double kScaleLost = 1e-3;
+
 // Result of one solve on a fixed set of free columns.
 struct CoreSolve {
   Eigen::VectorXd chi_t;       // over `columns` (free parameters then the last column), last = 1
@@ -103,6 +107,9 @@ struct CoreSolve {
   Eigen::VectorXd singular_values;
   double sigma_w = 0.0;
   double scale_entry = 1.0;
+  // Unit solution vector (equilibrated columns for noise-aware, raw for paper): when its last entry
+  // vanishes, its large entries name the parameters that are confounded with each other.
+  Eigen::VectorXd direction;
   int iterations = 0;
 };
 
@@ -133,7 +140,8 @@ Eigen::MatrixXd WeightedR(const Eigen::MatrixXd& a, const Eigen::VectorXd& weigh
 // `effective_metric` receives the metric actually used (with the small regularisation), so that
 // the refinement minimises exactly the same criterion.
 Eigen::VectorXd GeneralizedTls(const Eigen::MatrixXd& r, const Eigen::MatrixXd& metric, double* scale_entry,
-                               Eigen::VectorXd* singular_values, Eigen::MatrixXd* effective_metric = nullptr) {
+                               Eigen::VectorXd* singular_values, Eigen::MatrixXd* effective_metric = nullptr,
+                               Eigen::VectorXd* direction = nullptr) {
   const int n = static_cast<int>(r.cols());
   // Equilibrate columns so that the conditioning of R does not depend on units.
   const Eigen::VectorXd norms = r.colwise().norm().transpose().cwiseMax(1e-300);
@@ -154,6 +162,7 @@ Eigen::VectorXd GeneralizedTls(const Eigen::MatrixXd& r, const Eigen::MatrixXd& 
   Eigen::VectorXd x_eq = l.transpose().triangularView<Eigen::Upper>().solve(y);
   x_eq.normalize();
   *scale_entry = std::abs(x_eq[n - 1]);
+  if (direction) *direction = x_eq;
   Eigen::VectorXd x = norms.cwiseInverse().asDiagonal() * x_eq;
   return x / x[n - 1];
 }
@@ -164,18 +173,84 @@ std::vector<int> ComponentCounts(const IdimSystem& system) {
   return counts;
 }
 
+// R factors of each group's rows (W_g = Q_g R_g) over all columns, computed once: every re-weighting
+// and column subset afterwards works exactly on these small matrices, since the weights are constant
+// within a group and ||W_g x|| = ||R_g x||. This keeps a 1 h log's many fixed-point iterations and
+// essential-parameter steps from re-factoring a million-row matrix.
+struct GroupFactors {
+  std::vector<Eigen::MatrixXd> r;
+  std::vector<int> counts;
+};
+
+GroupFactors FactorGroups(const IdimSystem& system) {
+  GroupFactors out;
+  out.counts = ComponentCounts(system);
+  const int groups = system.num_groups(), cols = static_cast<int>(system.w.cols());
+  std::vector<std::vector<int>> rows_of(groups);
+  for (int i = 0; i < static_cast<int>(system.row_group.size()); ++i) rows_of[system.row_group[i]].push_back(i);
+  out.r.resize(groups);
+  for (int g = 0; g < groups; ++g) {
+    Eigen::MatrixXd gathered(rows_of[g].size(), cols);
+    for (size_t k = 0; k < rows_of[g].size(); ++k) gathered.row(k) = system.w.row(rows_of[g][k]);
+    if (gathered.rows() >= cols) {
+      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(gathered);
+      out.r[g] = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+    } else {
+      out.r[g] = gathered;
+    }
+  }
+  return out;
+}
+
+// R (n x n) of the row-weighted matrix restricted to `columns`: the QR of the stacked
+// sqrt(weight_g) R_g[:, columns].
+Eigen::MatrixXd StackedR(const GroupFactors& factors, const std::vector<int>& columns,
+                         const std::vector<double>& group_weight) {
+  const int n = static_cast<int>(columns.size());
+  int rows = 0;
+  for (const Eigen::MatrixXd& r : factors.r) rows += static_cast<int>(r.rows());
+  Eigen::MatrixXd stacked(std::max(rows, n), n);
+  stacked.setZero();
+  int row = 0;
+  for (size_t g = 0; g < factors.r.size(); ++g) {
+    const double scale = std::sqrt(group_weight[g]);
+    for (int k = 0; k < n; ++k) stacked.block(row, k, factors.r[g].rows(), 1) = scale * factors.r[g].col(columns[k]);
+    row += static_cast<int>(factors.r[g].rows());
+  }
+  Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(stacked);
+  return qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+}
+
+// ||W_g[:, columns] x||^2 per group.
+std::vector<double> GroupSquaredNorms(const GroupFactors& factors, const std::vector<int>& columns,
+                                      const Eigen::VectorXd& x) {
+  Eigen::VectorXd full = Eigen::VectorXd::Zero(factors.r.empty() ? 0 : factors.r[0].cols());
+  for (size_t k = 0; k < columns.size(); ++k) full[columns[k]] = x[k];
+  std::vector<double> out(factors.r.size());
+  for (size_t g = 0; g < factors.r.size(); ++g) out[g] = (factors.r[g] * full).squaredNorm();
+  return out;
+}
+
+Eigen::VectorXd RowWeights(const IdimSystem& system, const std::vector<double>& group_weight) {
+  Eigen::VectorXd weight(system.row_group.size());
+  for (size_t i = 0; i < system.row_group.size(); ++i) weight[i] = group_weight[system.row_group[i]];
+  return weight;
+}
+
 // The paper: TLS by SVD, weighted by component, statistics of eq. (18)-(22).
-CoreSolve SolvePaper(const IdimSystem& system, const std::vector<int>& columns, const TlsOptions& options) {
-  const Eigen::MatrixXd a = SelectColumns(system.w, columns);
-  const int rows = static_cast<int>(a.rows()), n = static_cast<int>(columns.size());
-  Eigen::VectorXd weight(rows);
-  for (int i = 0; i < rows; ++i) weight[i] = std::pow(system.flight_weight[IdimSystem::Flight(system.row_group[i])], 2);
+CoreSolve SolvePaper(const IdimSystem& system, const GroupFactors& factors, const std::vector<int>& columns,
+                     const TlsOptions& options) {
+  const int rows = static_cast<int>(system.w.rows()), n = static_cast<int>(columns.size());
+  const int groups = system.num_groups();
+  std::vector<double> group_weight(groups);
+  for (int g = 0; g < groups; ++g) group_weight[g] = std::pow(system.flight_weight[IdimSystem::Flight(g)], 2);
   CoreSolve out;
   auto solve = [&]() {
-    const Eigen::MatrixXd r = WeightedR(a, weight);
+    const Eigen::MatrixXd r = StackedR(factors, columns, group_weight);
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Eigen::VectorXd v = svd.matrixV().col(n - 1);
     out.scale_entry = std::abs(v[n - 1]);
+    out.direction = v;
     out.chi_t = v / v[n - 1];
     out.singular_values = svd.singularValues();
     return std::make_pair(r, svd);
@@ -183,15 +258,12 @@ CoreSolve SolvePaper(const IdimSystem& system, const std::vector<int>& columns, 
   auto [r, svd] = solve();
   out.iterations = 1;
   if (options.weight_by_component) {
-    const Eigen::VectorXd rho = a * out.chi_t;
-    std::vector<double> sum_sq(system.num_groups(), 0.0);
-    const std::vector<int> counts = ComponentCounts(system);
-    for (int i = 0; i < rows; ++i) sum_sq[system.row_group[i]] += rho[i] * rho[i];
-    for (int i = 0; i < rows; ++i) {
-      const int g = system.row_group[i];
-      const double sigma = std::sqrt(sum_sq[g] / std::max(1, counts[g] - 1));
-      // Fx and Fy rows carry no rotor term; a group with no error at all keeps its weight.
-      if (sigma > 0.0) weight[i] /= sigma * sigma;
+    const std::vector<double> sum_sq = GroupSquaredNorms(factors, columns, out.chi_t);
+    for (int g = 0; g < groups; ++g) {
+      // A group without error (noise-free data) keeps its weight instead of an infinite one.
+      const double scale = factors.r[g].norm() / std::sqrt(std::max(1, factors.counts[g]));
+      const double sigma = std::sqrt(sum_sq[g] / std::max(1, factors.counts[g] - 1));
+      if (sigma > 1e-9 * scale) group_weight[g] /= sigma * sigma;
     }
     std::tie(r, svd) = solve();
     out.iterations = 2;
@@ -204,14 +276,16 @@ CoreSolve SolvePaper(const IdimSystem& system, const std::vector<int>& columns, 
   const double chi_sq = out.chi_t.head(n - 1).squaredNorm();
   out.covariance = out.sigma_w * out.sigma_w * (1.0 + chi_sq) *
                    (w_bar.transpose() * w_bar).ldlt().solve(Eigen::MatrixXd::Identity(n - 1, n - 1));
-  out.row_weight = weight;
+  out.row_weight = RowWeights(system, group_weight);
   out.metric = Eigen::MatrixXd::Identity(n, n);
   return out;
 }
 
 // Newey-West (Bartlett) lag: twice the first lag at which the whitened residual's autocorrelation
-// falls below 0.1, so the covariance accounts for the filter's and the model error's memory.
+// falls below 0.1 (searched up to 200 samples), so the covariance accounts for the filter's and the
+// model error's memory.
 int AutocorrelationLag(const Eigen::VectorXd& r, const IdimSystem& system) {
+  constexpr int kMaxLag = 200;
   int lag_max = 0;
   for (int j = 0; j < 6; ++j) {
     std::vector<double> series;
@@ -223,7 +297,7 @@ int AutocorrelationLag(const Eigen::VectorXd& r, const IdimSystem& system) {
     for (double v : series) c0 += v * v;
     if (c0 <= 0.0) continue;
     int lag = 1;
-    for (; lag < n / 10; ++lag) {
+    for (; lag < std::min(n / 10, kMaxLag); ++lag) {
       double c = 0.0;
       for (int t = 0; t + lag < n; ++t) c += series[t] * series[t + lag];
       if (c / c0 < 0.1) break;
@@ -235,38 +309,34 @@ int AutocorrelationLag(const Eigen::VectorXd& r, const IdimSystem& system) {
 
 // rotorid's default: errors-in-variables TLS with the noise metric, iterated to a fixed point of the
 // row weights and equation-error variances; sandwich covariance robust to autocorrelation.
-CoreSolve SolveNoiseAware(const IdimSystem& system, const std::vector<int>& columns, const TlsOptions& options) {
-  const Eigen::MatrixXd a = SelectColumns(system.w, columns);
-  const int rows = static_cast<int>(a.rows()), n = static_cast<int>(columns.size());
+CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors, const std::vector<int>& columns,
+                          const TlsOptions& options) {
+  const int rows = static_cast<int>(system.w.rows()), n = static_cast<int>(columns.size());
   const int groups = system.num_groups();
-  const std::vector<int> counts = ComponentCounts(system);
+  const std::vector<int>& counts = factors.counts;
   std::vector<Eigen::MatrixXd> group_cov(groups);
   for (int g = 0; g < groups; ++g) group_cov[g] = SelectBlock(system.group_noise_cov[g], columns);
 
   CoreSolve out;
   // Start: TLS on equilibrated columns with unit row weights.
-  Eigen::VectorXd weight = Eigen::VectorXd::Ones(rows);
+  std::vector<double> group_weight(groups, 1.0);
   {
-    const Eigen::MatrixXd r = WeightedR(a, weight);
+    const Eigen::MatrixXd r = StackedR(factors, columns, group_weight);
     const Eigen::VectorXd norms = r.colwise().norm().transpose().cwiseMax(1e-300);
-    out.chi_t = GeneralizedTls(r, norms.cwiseAbs2().asDiagonal(), &out.scale_entry, &out.singular_values);
+    out.chi_t = GeneralizedTls(r, norms.cwiseAbs2().asDiagonal(), &out.scale_entry, &out.singular_values, nullptr,
+                               &out.direction);
   }
   Eigen::MatrixXd metric = Eigen::MatrixXd::Zero(n, n);
+  Eigen::MatrixXd r;
   for (int it = 1; it <= options.max_iterations; ++it) {
-    const Eigen::VectorXd rho = a * out.chi_t;
-    std::vector<double> sum_sq(groups, 0.0), rotor_sq(groups, 0.0);
-    for (int i = 0; i < rows; ++i) {
-      sum_sq[system.row_group[i]] += rho[i] * rho[i];
-      const double rotor = a(i, 0) * out.chi_t[0];
-      rotor_sq[system.row_group[i]] += rotor * rotor;
-    }
+    const std::vector<double> sum_sq = GroupSquaredNorms(factors, columns, out.chi_t);
     metric.setZero();
-    std::vector<double> group_weight(groups, 0.0);
     for (int g = 0; g < groups; ++g) {
       if (counts[g] == 0) continue;
+      const double rotor_sq = std::pow(out.chi_t[0], 2) * factors.r[g].col(columns[0]).squaredNorm();
       const double noise_var = out.chi_t.dot(group_cov[g] * out.chi_t) / counts[g];
       const double residual_var = sum_sq[g] / counts[g];
-      const double floor = 1e-24 * (rotor_sq[g] / counts[g]) + 1e-300;
+      const double floor = 1e-24 * (rotor_sq / counts[g]) + 1e-300;
       const double total_var = std::max({residual_var, noise_var, floor});
       const double equation_var = total_var - noise_var;
       const double user = system.flight_weight[IdimSystem::Flight(g)];
@@ -274,30 +344,32 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const std::vector<int>& colu
       metric += group_weight[g] * group_cov[g];
       metric(n - 1, n - 1) += group_weight[g] * counts[g] * equation_var;
     }
-    for (int i = 0; i < rows; ++i) weight[i] = group_weight[system.row_group[i]];
-    const Eigen::MatrixXd r = WeightedR(a, weight);
+    r = StackedR(factors, columns, group_weight);
     const Eigen::VectorXd previous = out.chi_t;
-    out.chi_t = GeneralizedTls(r, metric, &out.scale_entry, &out.singular_values, &out.metric);
+    out.chi_t = GeneralizedTls(r, metric, &out.scale_entry, &out.singular_values, &out.metric, &out.direction);
     out.iterations = it;
     const double change = ((out.chi_t - previous).cwiseAbs().array() /
                            (previous.cwiseAbs().array() + 1e-300)).maxCoeff();
     if (!(change > 1e-10)) break;
   }
-  out.row_weight = weight;
+  out.row_weight = RowWeights(system, group_weight);
   metric = out.metric;
 
-  // Whitened residuals r_i = sqrt(lambda_i) (w_i . chi_t) / d, d^2 = chi_t^T N chi_t / rows, and
-  // their Jacobian over the free parameters; sandwich covariance H^-1 S H^-1 (Newey-West).
+  // Whitened residuals r_i = sqrt(lambda_i) (w_i . chi_t) / d, d^2 = chi_t^T N chi_t / rows, with
+  // Jacobian J_i = sqrt(lambda_i) w_i / d - r_i c over the free parameters, c = (N chi_t) / (rows d^2);
+  // sandwich covariance H^-1 S H^-1 with S by Newey-West over samples. H follows from R exactly;
+  // the scores are streamed sample by sample.
   const double d_sq = std::max(out.chi_t.dot(metric * out.chi_t) / rows, 1e-300);
   const double d = std::sqrt(d_sq);
-  const Eigen::VectorXd n_chi = (metric * out.chi_t).head(n - 1);
-  const Eigen::VectorXd sqrt_weight = weight.cwiseSqrt();
-  const Eigen::VectorXd resid = (sqrt_weight.asDiagonal() * (a * out.chi_t)) / d;
-  Eigen::MatrixXd jac = (sqrt_weight.asDiagonal() * a.leftCols(n - 1)) / d;
-  jac -= resid * n_chi.transpose() / (rows * d_sq);
+  const Eigen::VectorXd c = (metric * out.chi_t).head(n - 1) / (rows * d_sq);
+  Eigen::VectorXd chi_full = Eigen::VectorXd::Zero(system.w.cols());
+  for (int k = 0; k < n; ++k) chi_full[columns[k]] = out.chi_t[k];
+  const Eigen::VectorXd sqrt_weight = out.row_weight.cwiseSqrt();
+  const Eigen::VectorXd resid = sqrt_weight.cwiseProduct(system.w * chi_full) / d;
   out.sigma_w = std::sqrt(resid.squaredNorm() / std::max(1, rows - (n - 1)));
-  const Eigen::MatrixXd h = jac.transpose() * jac;
-  // Scores per sample (rows of one sample share their noise), per flight.
+  const Eigen::MatrixXd gram = (r.transpose() * r).topLeftCorner(n - 1, n - 1);
+  const Eigen::VectorXd u = (r.transpose() * (r * out.chi_t)).head(n - 1) / d;
+  const Eigen::MatrixXd h = gram / d_sq - (u * c.transpose() + c * u.transpose()) / d + resid.squaredNorm() * c * c.transpose();
   const int lag = AutocorrelationLag(resid, system);
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(n - 1, n - 1);
   int begin = 0;
@@ -306,9 +378,16 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const std::vector<int>& colu
     int end = begin;
     while (end < rows && IdimSystem::Flight(system.row_group[end]) == flight) ++end;
     const int samples = (end - begin) / 6;
-    Eigen::MatrixXd scores(n - 1, samples);
-    for (int t = 0; t < samples; ++t)
-      scores.col(t) = jac.middleRows(begin + 6 * t, 6).transpose() * resid.segment(begin + 6 * t, 6);
+    Eigen::MatrixXd scores = Eigen::MatrixXd::Zero(n - 1, samples);
+    for (int t = 0; t < samples; ++t) {
+      double r_sq = 0.0;
+      for (int i = begin + 6 * t; i < begin + 6 * t + 6; ++i) {
+        const double weighted = sqrt_weight[i] * resid[i] / d;
+        for (int k = 0; k < n - 1; ++k) scores(k, t) += weighted * system.w(i, columns[k]);
+        r_sq += resid[i] * resid[i];
+      }
+      scores.col(t) -= r_sq * c;
+    }
     s += scores * scores.transpose();
     for (int l = 1; l <= lag && l < samples; ++l) {
       const double w_l = 1.0 - static_cast<double>(l) / (lag + 1);
@@ -358,17 +437,38 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   if (system.w.rows() <= p + 1) throw Error("too few rows (" + std::to_string(system.w.rows()) + ") for " +
                                             std::to_string(p) + " parameters");
 
+  const GroupFactors factors = FactorGroups(system);
   CoreSolve core;
   while (true) {
     std::vector<int> columns = free;
     columns.push_back(p);
-    core = options.method == TlsMethod::kPaper ? SolvePaper(system, columns, options)
-                                               : SolveNoiseAware(system, columns, options);
+    core = options.method == TlsMethod::kPaper ? SolvePaper(system, factors, columns, options)
+                                               : SolveNoiseAware(system, factors, columns, options);
     const int nf = static_cast<int>(free.size());
     Eigen::VectorXd rel(nf);
     for (int k = 0; k < nf; ++k)
       rel[k] = 100.0 * std::sqrt(std::max(core.covariance(k, k), 0.0)) / std::max(std::abs(core.chi_t[k]), 1e-300);
     if (!options.select_essential || nf <= 1) break;
+    if (core.scale_entry < kScaleLost) {
+      // An exact dependency among parameters (a symmetric quad's kd and I_zz): drop the one with the
+      // largest share of the null direction, name its partner, and go on.
+      int first = 0, second = -1;
+      for (int k = 1; k < nf; ++k)
+        if (std::abs(core.direction[k]) > std::abs(core.direction[first])) first = k;
+      for (int k = 0; k < nf; ++k)
+        if (k != first && (second < 0 || std::abs(core.direction[k]) > std::abs(core.direction[second]))) second = k;
+      DiscardedParameter dropped;
+      dropped.name = system.parameter_names[free[first]];
+      dropped.rel_std_pct = std::numeric_limits<double>::infinity();
+      dropped.std = std::numeric_limits<double>::infinity();
+      dropped.most_correlated = second >= 0 ? system.parameter_names[free[second]] : "";
+      dropped.correlation = 1.0;
+      dropped.reason = "not identifiable: only a combination with " + dropped.most_correlated +
+                       " is determined by these flights";
+      solution.discarded.push_back(dropped);
+      free.erase(free.begin() + first);
+      continue;
+    }
     int worst = 0;
     rel.maxCoeff(&worst);
     const bool stop = options.method == TlsMethod::kPaper ? rel.maxCoeff() / rel.minCoeff() < options.r_sigma
@@ -377,6 +477,7 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
     DiscardedParameter dropped;
     dropped.name = system.parameter_names[free[worst]];
     dropped.rel_std_pct = rel[worst];
+    dropped.reason = "its %sigma exceeds the limit";
     dropped.value = core.chi_t[worst];
     dropped.std = std::sqrt(std::max(core.covariance(worst, worst), 0.0));
     for (int k = 0; k < nf; ++k) {
@@ -427,7 +528,7 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
     solution.usable = false;
     if (solution.message.empty()) solution.message = message;
   };
-  if (solution.scale_entry < 1e-3) {
+  if (solution.scale_entry < kScaleLost) {
     char buffer[64];
     std::snprintf(buffer, sizeof(buffer), "%.1e", solution.scale_entry);
     fail("scale lost: the solution vector's last entry is " + std::string(buffer) +

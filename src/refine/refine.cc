@@ -118,7 +118,7 @@ double AutocorrelationFactor(const Eigen::VectorXd& residuals) {
     if (n < 20 || c0 <= 0.0) continue;
     int cut = 1;
     std::vector<double> rho(1, 1.0);
-    for (; cut < n / 10; ++cut) {
+    for (; cut < std::min(n / 10, 200); ++cut) {
       double ck = 0.0;
       for (int t = 0; t + cut < n; ++t) ck += x[t] * x[t + cut];
       rho.push_back(ck / c0);

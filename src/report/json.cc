@@ -98,7 +98,8 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
     discarded.push_back({{"name", d.name},
                          {"rel_std_pct", Number(d.rel_std_pct)},
                          {"most_correlated_with", d.most_correlated},
-                         {"correlation", Number(d.correlation)}});
+                         {"correlation", Number(d.correlation)},
+                         {"reason", d.reason}});
   nlohmann::json flights = nlohmann::json::array();
   for (const FlightFit& fit : result.per_flight) flights.push_back(FlightFitJson(fit));
   return {{"method", TlsMethodName(s.method)},

@@ -81,6 +81,7 @@ struct DiscardedParameter {
   double rel_std_pct = 0.0;
   std::string most_correlated;    // the free parameter it was most correlated with
   double correlation = 0.0;
+  std::string reason;
 };
 
 struct TlsSolution {
