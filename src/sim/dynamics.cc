@@ -1,0 +1,153 @@
+#include "rotorid/sim/dynamics.h"
+
+#include <cmath>
+#include <utility>
+
+#include "rotorid/core/error.h"
+#include "rotorid/model/rigid_body.h"
+
+namespace rotorid {
+namespace {
+
+constexpr int kPositionIndex = 0;
+constexpr int kVelocityIndex = 3;
+constexpr int kQuaternionIndex = 6;  // w, x, y, z
+constexpr int kAngularVelocityIndex = 10;
+constexpr int kRotorIndex = 13;
+
+}  // namespace
+
+MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
+                                       double motor_tau_s)
+    : vehicle_(vehicle), parameters_(parameters), gravity_w_(0.0, 0.0, -gravity_mps2), motor_tau_s_(motor_tau_s) {
+  if (!(gravity_mps2 >= 0.0) || !std::isfinite(gravity_mps2)) throw Error("gravity must be a finite number >= 0");
+  if (!(motor_tau_s >= 0.0) || !std::isfinite(motor_tau_s)) throw Error("motor_tau_s must be a finite number >= 0");
+  // The 6x6 spatial inertia must be positive definite, or ForwardDynamics has no unique answer.
+  Eigen::Matrix<double, 6, 6> spatial;
+  const Eigen::Matrix3d ms_skew = Skew<double>(parameters.body.first_moment);
+  spatial << parameters.mass_kg * Eigen::Matrix3d::Identity(), -ms_skew, ms_skew, parameters.body.inertia;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(spatial);
+  if (!(parameters.mass_kg > 0.0) || !(eigen.eigenvalues().minCoeff() > 0.0))
+    throw Error(
+        "the simulated body's mass, first moment and inertia are not physically consistent "
+        "(spatial inertia not positive definite)");
+}
+
+Eigen::VectorXd MultirotorDynamics::ActingRotorSpeeds(double t_s, const SimState& state,
+                                                      const RotorCommand& command) const {
+  if (vehicle_.rotors.empty()) return Eigen::VectorXd();
+  return motor_tau_s_ > 0.0 ? state.rotor_speed_radps : command(t_s);
+}
+
+BodyAcceleration MultirotorDynamics::Accelerations(const SimState& state,
+                                                   const Eigen::VectorXd& rotor_speed_radps) const {
+  Wrench<double> wrench = Wrench<double>::Zero();
+  if (!vehicle_.rotors.empty())
+    wrench = RotorWrench<double>(rotor_speed_radps, parameters_.rotor.kt, parameters_.rotor.kd, vehicle_);
+  BodyAcceleration acc;
+  ForwardDynamics<double>(state.angular_velocity_b_radps, wrench, parameters_.mass_kg, parameters_.body.first_moment,
+                          parameters_.body.inertia, &acc.specific_force_b_mps2, &acc.angular_acceleration_b_radps2);
+  return acc;
+}
+
+Eigen::VectorXd MultirotorDynamics::Pack(const SimState& state) const {
+  Eigen::VectorXd x(kRotorIndex + vehicle_.num_rotors());
+  x.segment<3>(kPositionIndex) = state.position_w_m;
+  x.segment<3>(kVelocityIndex) = state.velocity_w_mps;
+  x.segment<4>(kQuaternionIndex) << state.attitude_wb.w(), state.attitude_wb.x(), state.attitude_wb.y(),
+      state.attitude_wb.z();
+  x.segment<3>(kAngularVelocityIndex) = state.angular_velocity_b_radps;
+  if (state.rotor_speed_radps.size() == vehicle_.num_rotors())
+    x.tail(vehicle_.num_rotors()) = state.rotor_speed_radps;
+  else
+    x.tail(vehicle_.num_rotors()).setZero();
+  return x;
+}
+
+SimState MultirotorDynamics::Unpack(const Eigen::VectorXd& x) const {
+  SimState state;
+  state.position_w_m = x.segment<3>(kPositionIndex);
+  state.velocity_w_mps = x.segment<3>(kVelocityIndex);
+  state.attitude_wb = Eigen::Quaterniond(x[kQuaternionIndex], x[kQuaternionIndex + 1], x[kQuaternionIndex + 2],
+                                         x[kQuaternionIndex + 3]);
+  state.angular_velocity_b_radps = x.segment<3>(kAngularVelocityIndex);
+  state.rotor_speed_radps = x.tail(vehicle_.num_rotors());
+  return state;
+}
+
+Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd& x,
+                                               const RotorCommand& command) const {
+  SimState state = Unpack(x);
+  // RK4's intermediate quaternions are not unit; the rotation uses the normalised one, while q'
+  // keeps the raw q so that the step stays a plain RK4 step.
+  const Eigen::Matrix3d r_wb = state.attitude_wb.normalized().toRotationMatrix();
+  const Eigen::VectorXd acting = ActingRotorSpeeds(t_s, state, command);
+  const BodyAcceleration acc = Accelerations(state, acting);
+
+  Eigen::VectorXd dx(x.size());
+  dx.segment<3>(kPositionIndex) = state.velocity_w_mps;
+  dx.segment<3>(kVelocityIndex) = r_wb * acc.specific_force_b_mps2 + gravity_w_;
+  const Eigen::Vector3d& w = state.angular_velocity_b_radps;
+  const Eigen::Quaterniond q_dot = state.attitude_wb * Eigen::Quaterniond(0.0, w.x(), w.y(), w.z());
+  dx.segment<4>(kQuaternionIndex) << 0.5 * q_dot.w(), 0.5 * q_dot.x(), 0.5 * q_dot.y(), 0.5 * q_dot.z();
+  dx.segment<3>(kAngularVelocityIndex) = acc.angular_acceleration_b_radps2;
+  if (motor_tau_s_ > 0.0 && !vehicle_.rotors.empty())
+    dx.tail(vehicle_.num_rotors()) = (command(t_s) - state.rotor_speed_radps) / motor_tau_s_;
+  else
+    dx.tail(vehicle_.num_rotors()).setZero();
+  return dx;
+}
+
+SimState MultirotorDynamics::Step(double t_s, const SimState& state, double h_s, const RotorCommand& command) const {
+  const Eigen::VectorXd x = Pack(state);
+  const Eigen::VectorXd k1 = Derivative(t_s, x, command);
+  const Eigen::VectorXd k2 = Derivative(t_s + 0.5 * h_s, x + 0.5 * h_s * k1, command);
+  const Eigen::VectorXd k3 = Derivative(t_s + 0.5 * h_s, x + 0.5 * h_s * k2, command);
+  const Eigen::VectorXd k4 = Derivative(t_s + h_s, x + h_s * k3, command);
+  SimState next = Unpack(x + (h_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4));
+  next.attitude_wb.normalize();
+  // Without a lag the rotor speed is the command itself; keep the state showing what acts.
+  if (motor_tau_s_ == 0.0 && !vehicle_.rotors.empty()) next.rotor_speed_radps = command(t_s + h_s);
+  return next;
+}
+
+SimState IntegrateFreeBody(double mass_kg, const BodyParameters& body, const SimState& initial, double duration_s,
+                           double step_s) {
+  if (!(duration_s >= 0.0) || !(step_s > 0.0)) throw Error("IntegrateFreeBody needs duration >= 0 and step > 0");
+  Vehicle free_body;
+  free_body.mass_kg = mass_kg;
+  VehicleParameters parameters;
+  parameters.mass_kg = mass_kg;
+  parameters.body = body;
+  const MultirotorDynamics dynamics(free_body, parameters, /*gravity_mps2=*/0.0, /*motor_tau_s=*/0.0);
+  const MultirotorDynamics::RotorCommand no_rotors = [](double) { return Eigen::VectorXd(); };
+  const int num_steps = static_cast<int>(std::ceil(duration_s / step_s - 1e-9));
+  const double h = num_steps > 0 ? duration_s / num_steps : 0.0;
+  SimState state = initial;
+  state.rotor_speed_radps.resize(0);
+  for (int k = 0; k < num_steps; ++k) state = dynamics.Step(k * h, state, h, no_rotors);
+  return state;
+}
+
+Eigen::Vector3d LinearMomentumWorld(double mass_kg, const BodyParameters& body, const SimState& state) {
+  // P = sum m_i (v + w x rho_i) = m v + R (w x ms)
+  const Eigen::Matrix3d r_wb = state.attitude_wb.toRotationMatrix();
+  return mass_kg * state.velocity_w_mps + r_wb * state.angular_velocity_b_radps.cross(body.first_moment);
+}
+
+Eigen::Vector3d AngularMomentumWorld(double mass_kg, const BodyParameters& body, const SimState& state) {
+  // H_origin = p x P + R (I w + ms x v_b), I and ms at O_d.
+  const Eigen::Matrix3d r_wb = state.attitude_wb.toRotationMatrix();
+  const Eigen::Vector3d v_b = r_wb.transpose() * state.velocity_w_mps;
+  const Eigen::Vector3d h_od_b = body.inertia * state.angular_velocity_b_radps + body.first_moment.cross(v_b);
+  return state.position_w_m.cross(LinearMomentumWorld(mass_kg, body, state)) + r_wb * h_od_b;
+}
+
+double KineticEnergy(double mass_kg, const BodyParameters& body, const SimState& state) {
+  // T = m |v|^2 / 2 + v_b . (w x ms) + w^T I w / 2
+  const Eigen::Vector3d v_b = state.attitude_wb.toRotationMatrix().transpose() * state.velocity_w_mps;
+  const Eigen::Vector3d& w = state.angular_velocity_b_radps;
+  return 0.5 * mass_kg * v_b.squaredNorm() + v_b.dot(w.cross(body.first_moment)) + 0.5 * w.dot(body.inertia * w);
+}
+
+}  // namespace rotorid

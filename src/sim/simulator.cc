@@ -1,0 +1,380 @@
+#include "rotorid/sim/simulator.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <locale>
+#include <sstream>
+#include <vector>
+
+#include "rotorid/core/error.h"
+#include "rotorid/model/rotation.h"
+#include "rotorid/sim/dynamics.h"
+#include "rotorid/sim/random.h"
+#include "sim/flight_controller.h"
+
+namespace rotorid {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kRadToDeg = 180.0 / kPi;
+constexpr double kHoverAltitudeM = 1.5;
+
+// Independent random streams drawn from the one seed.
+enum RandomStreamId : std::uint64_t { kPilotStream = 1, kControllerStream, kJitterStream, kImuStream, kMocapStream };
+
+std::string FormatNumber(double value) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << std::setprecision(10) << value;
+  return out.str();
+}
+
+// The logged rotor signal as the motors see it: Omega_cmd(t) = Omega_log(t - delay_s), the log
+// interpolated linearly between its samples and held before the first (INTERFACE.md, `delay`).
+class DelayedRotorSignal {
+ public:
+  explicit DelayedRotorSignal(double delay_s) : delay_s_(delay_s) {}
+
+  void Append(double t_s, const Eigen::VectorXd& omega_radps) {
+    times_.push_back(t_s);
+    values_.push_back(omega_radps);
+  }
+  const Eigen::VectorXd& Sample(int k) const { return values_[k]; }
+
+  Eigen::VectorXd At(double t_s) const {
+    const double t_log = t_s - delay_s_;
+    if (t_log <= times_.front()) return values_.front();
+    if (t_log >= times_.back()) return values_.back();
+    const size_t upper = static_cast<size_t>(std::upper_bound(times_.begin(), times_.end(), t_log) - times_.begin());
+    const size_t lower = upper - 1;
+    const double fraction = (t_log - times_[lower]) / (times_[upper] - times_[lower]);
+    return (1.0 - fraction) * values_[lower] + fraction * values_[upper];
+  }
+
+ private:
+  double delay_s_;
+  std::vector<double> times_;
+  std::vector<Eigen::VectorXd> values_;
+};
+
+// Relative parameter error of the controller: a random sign times a magnitude in [min, max].
+double ControllerError(RandomStream* random, const SimulationOptions& options) {
+  const double sign = random->Uniform() < 0.5 ? -1.0 : 1.0;
+  return sign * random->Uniform(options.controller_error_min, options.controller_error_max);
+}
+
+Eigen::Vector3d NoiseVector(RandomStream* random, double std) {
+  const double x = random->Normal(), y = random->Normal(), z = random->Normal();
+  return std * Eigen::Vector3d(x, y, z);
+}
+
+// Brings `angle` within pi of `previous` (keeps a logged yaw continuous).
+double Unwrap(double angle, double previous) {
+  return angle - 2.0 * kPi * std::round((angle - previous) / (2.0 * kPi));
+}
+
+// The result with its log (metadata set) and true states sized for `num_logged` samples.
+SimulationResult PrepareResult(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options,
+                               int num_logged) {
+  SimulationResult result;
+  result.vehicle = vehicle;
+  result.truth = truth;
+  result.effects = options.effects;
+  result.noise = options.noise;
+  result.options = options;
+  const int num_rotors = vehicle.num_rotors();
+
+  FlightLog& log = result.log;
+  log.source = "rotorid simulate";
+  log.gravity_mps2 = options.gravity_mps2;
+  log.t_s.resize(num_logged);
+  log.gyro_radps.resize(num_logged, 3);
+  log.acc_mps2.resize(num_logged, 3);
+  log.rotor_radps.resize(num_logged, num_rotors);
+  if (options.mocap) log.mocap = MocapTrack{Eigen::MatrixX3d(num_logged, 3), Eigen::MatrixX3d(num_logged, 3)};
+  // No effect parameters here: the log must not tell the diagnosis what to find.
+  log.metadata["gravity"] = FormatNumber(options.gravity_mps2);
+  log.metadata["simulator"] = "rotorid simulate";
+  log.metadata["seed"] = std::to_string(options.seed);
+  log.metadata["noise"] = options.noise.name;
+  log.metadata["vehicle"] = vehicle.name;
+  log.metadata["rate_hz"] = FormatNumber(options.log_rate_hz);
+
+  TrueStates& states = result.states;
+  states.t_s.resize(num_logged);
+  for (Eigen::MatrixX3d* m :
+       {&states.position_w_m, &states.velocity_w_mps, &states.bryant_rad, &states.specific_force_b_mps2,
+        &states.angular_velocity_b_radps, &states.angular_acceleration_b_radps2})
+    m->resize(num_logged, 3);
+  states.attitude_wxyz.resize(num_logged, 4);
+  states.rotor_speed_radps.resize(num_logged, num_rotors);
+  states.rotor_command_radps.resize(num_logged, num_rotors);
+  return result;
+}
+
+FlightSummary Summarise(const TrueStates& states) {
+  FlightSummary summary;
+  const Eigen::Index n = states.t_s.size();
+  summary.num_samples = static_cast<int>(n);
+  summary.duration_s = n > 1 ? states.t_s[n - 1] - states.t_s[0] : 0.0;
+  if (n == 0) return summary;
+  auto range = [](const Eigen::VectorXd& v) { return Eigen::Vector2d(v.minCoeff(), v.maxCoeff()); };
+  summary.roll_range_deg = range(states.bryant_rad.col(0)) * kRadToDeg;
+  summary.pitch_range_deg = range(states.bryant_rad.col(1)) * kRadToDeg;
+  summary.yaw_rate_range_radps = range(states.angular_velocity_b_radps.col(2));
+  summary.altitude_range_m = range(states.position_w_m.col(2));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Quaterniond q(states.attitude_wxyz(i, 0), states.attitude_wxyz(i, 1), states.attitude_wxyz(i, 2),
+                               states.attitude_wxyz(i, 3));
+    const double cos_tilt = std::clamp(q.toRotationMatrix()(2, 2), -1.0, 1.0);
+    summary.max_tilt_deg = std::max(summary.max_tilt_deg, std::acos(cos_tilt) * kRadToDeg);
+    summary.max_horizontal_distance_m =
+        std::max(summary.max_horizontal_distance_m, states.position_w_m.row(i).head<2>().norm());
+  }
+  for (int a = 0; a < 3; ++a)
+    summary.angular_acceleration_rms_radps2[a] =
+        std::sqrt(states.angular_acceleration_b_radps2.col(a).squaredNorm() / n);
+  const Eigen::VectorXd thrust = states.rotor_speed_radps.cwiseAbs2().rowwise().sum();
+  const double mean = thrust.mean();
+  summary.thrust_rms_variation_pct = 100.0 * std::sqrt((thrust.array() - mean).square().mean()) / mean;
+  summary.rotor_speed_range_radps << states.rotor_speed_radps.minCoeff(), states.rotor_speed_radps.maxCoeff();
+  return summary;
+}
+
+}  // namespace
+
+NoiseLevels NoiseLevels::Preset(const std::string& name) {
+  NoiseLevels noise;
+  noise.name = name;
+  if (name == "none") {
+    noise.gyro_std_radps = noise.acc_std_mps2 = noise.mocap_position_std_m = noise.mocap_angle_std_rad = 0.0;
+  } else if (name == "low") {
+    noise.gyro_std_radps = 0.001;
+    noise.acc_std_mps2 = 0.01;
+    noise.mocap_position_std_m = 0.1e-3;
+    noise.mocap_angle_std_rad = 0.0005;
+  } else if (name == "pixhawk") {
+    noise.gyro_std_radps = 0.01;
+    noise.acc_std_mps2 = 0.15;
+    noise.mocap_position_std_m = 0.5e-3;
+    noise.mocap_angle_std_rad = 0.002;
+  } else {
+    throw Error("unknown noise preset '" + name + "'; known presets: none, low, pixhawk");
+  }
+  return noise;
+}
+
+std::string SimulationOptions::Validate() const {
+  auto bad = [](double v) { return !std::isfinite(v); };
+  if (bad(duration_s) || !(duration_s > 0.0) || duration_s > 36000.0)
+    return "duration must be > 0 and <= 36000 s (got " + FormatNumber(duration_s) + ")";
+  if (bad(log_rate_hz) || log_rate_hz < 50.0 || log_rate_hz > 10000.0)
+    return "log rate must be within [50, 10000] Hz (got " + FormatNumber(log_rate_hz) + ")";
+  if (duration_s * log_rate_hz < 19.5 || duration_s * log_rate_hz > 2e7)
+    return "the flight must hold between 20 and 2e7 samples (duration * rate = " +
+           FormatNumber(duration_s * log_rate_hz) + ")";
+  if (bad(physics_rate_hz) || physics_rate_hz < 1000.0 || physics_rate_hz < log_rate_hz || physics_rate_hz > 1e6)
+    return "physics rate must be >= 1000 Hz, >= the log rate and <= 1e6 Hz (got " + FormatNumber(physics_rate_hz) + ")";
+  if (bad(gravity_mps2) || !(gravity_mps2 > 0.0) || gravity_mps2 > 100.0)
+    return "gravity must be within (0, 100] m/s^2 (got " + FormatNumber(gravity_mps2) + ")";
+  // Beyond these, the simulated controller can no longer fly the pilot's references safely.
+  if (bad(effects.delay_s) || effects.delay_s < 0.0 || effects.delay_s > 0.05)
+    return "delay_s must be within [0, 0.05] s (got " + FormatNumber(effects.delay_s) + ")";
+  if (bad(effects.motor_tau_s) || effects.motor_tau_s < 0.0 || effects.motor_tau_s > 0.08)
+    return "motor_tau_s must be within [0, 0.08] s (got " + FormatNumber(effects.motor_tau_s) + ")";
+  if (!effects.acc_bias.allFinite() || effects.acc_bias.norm() > 5.0)
+    return "acc_bias must be finite with norm <= 5 m/s^2";
+  if (!effects.gyro_bias.allFinite() || effects.gyro_bias.norm() > 0.5)
+    return "gyro_bias must be finite with norm <= 0.5 rad/s";
+  if (!effects.misalignment_rad.allFinite() || effects.misalignment_rad.norm() > 0.3)
+    return "misalignment_rad must be finite with norm <= 0.3 rad";
+  for (double std : {noise.gyro_std_radps, noise.acc_std_mps2, noise.mocap_position_std_m, noise.mocap_angle_std_rad})
+    if (bad(std) || std < 0.0) return "noise standard deviations must be finite and >= 0";
+  if (bad(jitter_s) || jitter_s < 0.0 || jitter_s > 0.2 / log_rate_hz)
+    return "jitter must be within [0, 0.2 / rate] s = [0, " + FormatNumber(0.2 / log_rate_hz) + "] s (got " +
+           FormatNumber(jitter_s) + ")";
+  if (bad(excitation) || excitation < 0.0 || excitation > 2.0)
+    return "excitation must be within [0, 2] (got " + FormatNumber(excitation) + ")";
+  if (bad(hover_lead_in_s) || hover_lead_in_s < 0.0) return "hover lead-in must be >= 0 s";
+  if (bad(warmup_s) || warmup_s < 0.0 || warmup_s > 60.0) return "warm-up must be within [0, 60] s";
+  if (bad(controller_error_min) || bad(controller_error_max) || controller_error_min < 0.0 ||
+      controller_error_max < controller_error_min || controller_error_max > 0.3)
+    return "controller errors must satisfy 0 <= min <= max <= 0.3";
+  return {};
+}
+
+Eigen::VectorXd HoverRotorSpeeds(const Vehicle& vehicle, const VehicleParameters& truth, double gravity_mps2) {
+  const int n = vehicle.num_rotors();
+  Eigen::MatrixXd allocation(4, n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d& p = vehicle.rotors[i].position_m;
+    allocation.col(i) << truth.rotor.kt, truth.rotor.kt * p.y(), -truth.rotor.kt * p.x(),
+        -vehicle.rotors[i].spin * truth.rotor.kd;
+  }
+  // At rest and level, s = [0 0 g]: the rotors carry m g and cancel the gravity torque -s x ms.
+  const Eigen::Vector3d s(0.0, 0.0, gravity_mps2);
+  const Eigen::Vector3d torque = -s.cross(truth.body.first_moment);
+  const Eigen::Vector4d wrench(truth.mass_kg * gravity_mps2, torque.x(), torque.y(), 0.0);
+  const Eigen::VectorXd speed_sq = allocation.completeOrthogonalDecomposition().solve(wrench);
+  if (!((allocation * speed_sq - wrench).norm() <= 1e-9 * wrench.norm()) || !(speed_sq.minCoeff() > 0.0))
+    throw Error("vehicle '" + vehicle.name + "' cannot hover: its centre of mass lies outside what its rotors can " +
+                "balance (hover would need a negative or impossible rotor thrust)");
+  return speed_sq.cwiseSqrt();
+}
+
+SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error("simulation options: " + problem);
+  if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error("simulated vehicle: " + problem);
+  if (!(truth.rotor.kt > 0.0) || !(truth.rotor.kd > 0.0) || !std::isfinite(truth.rotor.kt) ||
+      !std::isfinite(truth.rotor.kd))
+    throw Error("simulated vehicle: kt and kd must be positive");
+  const Effects& effects = options.effects;
+  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, effects.motor_tau_s);
+  const double g = options.gravity_mps2;
+
+  // The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
+  RandomStream controller_random(options.seed, kControllerStream);
+  internal::ControllerModel model;
+  model.mass_kg = vehicle.mass_kg;
+  model.kt = truth.rotor.kt * (1.0 + ControllerError(&controller_random, options));
+  model.kd = truth.rotor.kd * (1.0 + ControllerError(&controller_random, options));
+  for (int a = 0; a < 3; ++a)
+    model.inertia_diagonal[a] = truth.body.inertia(a, a) * (1.0 + ControllerError(&controller_random, options));
+  const double loop_latency_s = effects.delay_s + effects.motor_tau_s + 1.0 / options.log_rate_hz;
+  internal::FlightController controller(vehicle, model, g, loop_latency_s, effects.motor_tau_s);
+
+  RandomStream pilot_random(options.seed, kPilotStream);
+  internal::PilotOptions pilot_options;
+  pilot_options.excitation = options.excitation;
+  pilot_options.start_s = options.hover_lead_in_s;
+  pilot_options.hover_altitude_m = kHoverAltitudeM;
+  const internal::Pilot pilot(pilot_options, &pilot_random);
+
+  // Sampling instants: the unlogged warm-up, then the log; jitter clipped so time keeps increasing.
+  const int num_warmup = static_cast<int>(std::lround(options.warmup_s * options.log_rate_hz));
+  const int num_logged = static_cast<int>(std::lround(options.duration_s * options.log_rate_hz));
+  const int num_total = num_warmup + num_logged;
+  std::vector<double> times(num_total);
+  RandomStream jitter_random(options.seed, kJitterStream);
+  const double max_jitter_s = 0.4 / options.log_rate_hz;
+  for (int k = 0; k < num_total; ++k) {
+    const double jitter = options.jitter_s > 0.0
+                              ? std::clamp(jitter_random.Normal(0.0, options.jitter_s), -max_jitter_s, max_jitter_s)
+                              : 0.0;
+    times[k] = (k - num_warmup) / options.log_rate_hz + jitter;
+  }
+
+  // Start trimmed in hover at rest: rotors at the exact hover speeds, controller integrators preset.
+  const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
+  SimState state;
+  state.position_w_m = Eigen::Vector3d(0.0, 0.0, kHoverAltitudeM);
+  state.rotor_speed_radps = hover;
+  DelayedRotorSignal rotor_signal(effects.delay_s);
+  rotor_signal.Append(times[0], hover);
+  controller.Trim(hover, pilot.At(times[0]));
+  const MultirotorDynamics::RotorCommand command = [&rotor_signal](double t_s) { return rotor_signal.At(t_s); };
+
+  SimulationResult result = PrepareResult(vehicle, truth, options, num_logged);
+  result.controller = {model.kt, model.kd, model.inertia_diagonal, controller.hover_speed_radps()};
+  FlightLog& log = result.log;
+  TrueStates& states = result.states;
+
+  RandomStream imu_random(options.seed, kImuStream);
+  RandomStream mocap_random(options.seed, kMocapStream);
+  const Eigen::Matrix3d imu_from_body = ExpSO3<double>(effects.misalignment_rad);
+  double previous_yaw = 0.0, previous_noisy_yaw = 0.0;
+
+  for (int k = 0; k < num_total; ++k) {
+    const double t = times[k];
+    const Eigen::Matrix3d r_wb = state.attitude_wb.toRotationMatrix();
+    const Eigen::VectorXd acting = dynamics.ActingRotorSpeeds(t, state, command);
+    const BodyAcceleration acc = dynamics.Accelerations(state, acting);
+    if (!state.position_w_m.allFinite() || state.position_w_m.norm() > 1000.0 ||
+        r_wb(2, 2) < std::cos(80.0 / kRadToDeg))
+      throw Error("the simulated flight diverged at t = " + FormatNumber(t) + " s (tilt " +
+                  FormatNumber(std::acos(std::clamp(r_wb(2, 2), -1.0, 1.0)) * kRadToDeg) +
+                  " deg); try a smaller excitation, delay or motor lag");
+
+    // IMU at O_d, INTERFACE.md's order: rotate into the IMU frame, add the bias, add the noise.
+    const Eigen::Vector3d gyro = imu_from_body * state.angular_velocity_b_radps + effects.gyro_bias +
+                                 NoiseVector(&imu_random, options.noise.gyro_std_radps);
+    const Eigen::Vector3d accelerometer = imu_from_body * acc.specific_force_b_mps2 + effects.acc_bias +
+                                          NoiseVector(&imu_random, options.noise.acc_std_mps2);
+
+    Eigen::Vector3d bryant = RotationToBryant(r_wb);
+    bryant.z() = previous_yaw = Unwrap(bryant.z(), previous_yaw);
+    if (k >= num_warmup) {
+      const int row = k - num_warmup;
+      log.t_s[row] = t;
+      log.gyro_radps.row(row) = gyro;
+      log.acc_mps2.row(row) = accelerometer;
+      log.rotor_radps.row(row) = rotor_signal.Sample(k);
+      if (options.mocap) {
+        log.mocap->position_w_m.row(row) =
+            state.position_w_m + NoiseVector(&mocap_random, options.noise.mocap_position_std_m);
+        Eigen::Vector3d noisy = bryant + NoiseVector(&mocap_random, options.noise.mocap_angle_std_rad);
+        noisy.z() = previous_noisy_yaw = Unwrap(noisy.z(), previous_noisy_yaw);
+        log.mocap->bryant_rad.row(row) = noisy;
+      }
+      states.t_s[row] = t;
+      states.position_w_m.row(row) = state.position_w_m;
+      states.velocity_w_mps.row(row) = state.velocity_w_mps;
+      states.attitude_wxyz.row(row) << state.attitude_wb.w(), state.attitude_wb.x(), state.attitude_wb.y(),
+          state.attitude_wb.z();
+      states.bryant_rad.row(row) = bryant;
+      states.specific_force_b_mps2.row(row) = acc.specific_force_b_mps2;
+      states.angular_velocity_b_radps.row(row) = state.angular_velocity_b_radps;
+      states.angular_acceleration_b_radps2.row(row) = acc.angular_acceleration_b_radps2;
+      states.rotor_speed_radps.row(row) = acting;
+      states.rotor_command_radps.row(row) = command(t);
+    }
+    if (k + 1 == num_total) break;
+
+    // The controller acts on this sample; its output is the logged rotor signal of the next one
+    // (one sample of latency), so the log interpolated between samples is exactly what the motors get.
+    const double dt_control = k > 0 ? t - times[k - 1] : 1.0 / options.log_rate_hz;
+    const internal::ControllerInput input{state.position_w_m, state.velocity_w_mps, state.attitude_wb, gyro};
+    rotor_signal.Append(times[k + 1], controller.Update(t, dt_control, input, pilot.At(t + loop_latency_s)));
+
+    // RK4 steps of at most 1 / physics_rate, cut where the motors' input has a kink (a logged
+    // sample arriving, t_j + delay), so that the piecewise-linear input is smooth within each step.
+    std::vector<double> segment_ends;
+    for (auto it = std::upper_bound(times.begin(), times.begin() + k + 2, t - effects.delay_s);
+         it != times.begin() + k + 2 && *it + effects.delay_s < times[k + 1]; ++it)
+      segment_ends.push_back(*it + effects.delay_s);
+    segment_ends.push_back(times[k + 1]);
+    double segment_start = t;
+    for (const double segment_end : segment_ends) {
+      const double length = segment_end - segment_start;
+      if (length <= 0.0) continue;
+      const int num_steps = std::max(1, static_cast<int>(std::ceil(length * options.physics_rate_hz - 1e-9)));
+      const double h = length / num_steps;
+      for (int j = 0; j < num_steps; ++j) state = dynamics.Step(segment_start + j * h, state, h, command);
+      segment_start = segment_end;
+    }
+  }
+  result.summary = Summarise(states);
+  return result;
+}
+
+std::string SummaryLine(const SimulationResult& result) {
+  const FlightSummary& s = result.summary;
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << std::fixed << std::setprecision(1) << "simulated " << s.duration_s << " s (" << s.num_samples << " samples at "
+      << std::setprecision(0) << result.options.log_rate_hz << " Hz) of vehicle " << result.vehicle.name << ", seed "
+      << result.options.seed << ", noise " << result.noise.name << ": roll [" << std::setprecision(1)
+      << s.roll_range_deg[0] << ", " << s.roll_range_deg[1] << "] deg, pitch [" << s.pitch_range_deg[0] << ", "
+      << s.pitch_range_deg[1] << "] deg, yaw rate [" << std::setprecision(2) << s.yaw_rate_range_radps[0] << ", "
+      << s.yaw_rate_range_radps[1] << "] rad/s, altitude [" << s.altitude_range_m[0] << ", " << s.altitude_range_m[1]
+      << "] m, max tilt " << std::setprecision(1) << s.max_tilt_deg << " deg, angular acc RMS ["
+      << s.angular_acceleration_rms_radps2[0] << ", " << s.angular_acceleration_rms_radps2[1] << ", "
+      << s.angular_acceleration_rms_radps2[2] << "] rad/s^2, thrust variation " << s.thrust_rms_variation_pct
+      << " % RMS, rotor speed [" << std::setprecision(0) << s.rotor_speed_range_radps[0] << ", "
+      << s.rotor_speed_range_radps[1] << "] rad/s";
+  return out.str();
+}
+
+}  // namespace rotorid
