@@ -1,15 +1,117 @@
-#include "commands.h"
+#include <iostream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
 
+#include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/io/atomic_file.h"
+#include "rotorid/io/flight_csv.h"
+#include "rotorid/io/vehicle_yaml.h"
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+#include "rotorid/sim/truth.h"
 
 namespace rotorid::cli {
+namespace {
 
-// Placeholder until the simulate issue lands: registers the subcommand and refuses to run.
+struct SimulateArguments {
+  std::string out_path;
+  std::string truth_path;
+  std::string vehicle_out_path;
+  std::string json_path;
+  std::string preset = "A";
+  std::string vehicle_path;
+  std::string noise = "pixhawk";
+  std::vector<std::string> effects;
+  std::string seed = "1";  // parsed here: CLI11 would wrap "-1" around to 2^64 - 1
+  SimulationOptions options;
+  bool quiet = false;
+};
+
+int RunSimulate(const CLI::App& app, const SimulateArguments& args) {
+  if (args.out_path.empty()) throw Error("simulate needs --out FILE (the flight log to write)");
+  if (app.count("--preset") > 0 && !args.vehicle_path.empty())
+    throw Error("give either --preset or --vehicle, not both");
+
+  SimulationOptions options = args.options;
+  if (args.seed.empty() || args.seed.size() > 19 || args.seed.find_first_not_of("0123456789") != std::string::npos)
+    throw Error("--seed must be a non-negative integer below 10^19 (got '" + args.seed + "')");
+  options.seed = std::stoull(args.seed);
+  options.noise = NoiseLevels::Preset(args.noise);
+  for (const std::string& effect : args.effects) options.effects.Assign(effect);
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+
+  const SimulationVehicle simulated =
+      args.vehicle_path.empty() ? PresetVehicle(args.preset) : LoadSimulationVehicle(args.vehicle_path);
+  SimulationResult result = Simulate(simulated.vehicle, simulated.parameters, options);
+  result.parameters_source = simulated.parameters_source;
+  if (args.vehicle_path.empty())
+    result.log.metadata["preset"] = args.preset;
+  else
+    result.log.metadata["vehicle_file"] = args.vehicle_path;
+
+  std::map<std::string, std::string> outputs{{"log", args.out_path}};
+  WriteFlightCsv(args.out_path, result.log);
+  if (!args.truth_path.empty()) {
+    WriteTruthJson(args.truth_path, result);
+    outputs["truth"] = args.truth_path;
+  }
+  if (!args.vehicle_out_path.empty()) {
+    WriteFileAtomically(args.vehicle_out_path, VehicleToYaml(result.vehicle));
+    outputs["vehicle"] = args.vehicle_out_path;
+  }
+  if (!args.json_path.empty()) {
+    outputs["json"] = args.json_path;
+    WriteFileAtomically(args.json_path, SimulationReportJson(result, outputs));
+  }
+  if (!args.quiet) {
+    std::cout << SummaryLine(result) << "\n";
+    std::cout << "wrote";
+    for (const auto& [role, path] : outputs) std::cout << " " << role << "=" << path;
+    std::cout << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
 Command AddSimulateCommand(CLI::App& root) {
+  auto args = std::make_shared<SimulateArguments>();
   Command command;
-  command.app = root.add_subcommand("simulate", "simulate (not yet available)");
-  command.app->allow_extras();
-  command.run = [] () -> int { throw Error("'simulate' is not available in this build yet"); };
+  CLI::App* app = root.add_subcommand(
+      "simulate",
+      "Simulates a closed-loop, pilot-like flight with known parameters and effects: writes the flight log (--out), "
+      "its ground truth (--truth) and the vehicle file (--vehicle-out). See docs/simulator.md.");
+  command.app = app;
+  app->add_option("--out", args->out_path, "flight log CSV to write (required)");
+  app->add_option("--truth", args->truth_path, "ground-truth JSON to write (parameters, effects, noise, seed)");
+  app->add_option("--vehicle-out", args->vehicle_out_path, "vehicle YAML to write (name, mass, rotors)");
+  app->add_option("--json", args->json_path, "run summary JSON to write");
+  app->add_option("--preset", args->preset, "the paper's configuration: A or B (default A)");
+  app->add_option("--vehicle", args->vehicle_path,
+                  "vehicle YAML to fly instead of a preset; true parameters from its optional simulation: mapping "
+                  "(kt, kd, ms: [3], inertia: [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]), else derived from mass and arm length");
+  app->add_option("--seconds", args->options.duration_s, "logged flight length in s (default 90)");
+  app->add_option("--seed", args->seed, "random seed, a non-negative integer: same seed, same bytes (default 1)");
+  app->add_option("--effect", args->effects,
+                  "unmodelled effect name=value, vectors name=x,y,z (repeatable): delay_s, motor_tau_s, acc_bias, "
+                  "gyro_bias, misalignment_rad")
+      ->allow_extra_args(false);
+  app->add_option("--noise", args->noise, "sensor noise preset: none, low or pixhawk (default pixhawk)");
+  app->add_option("--rate", args->options.log_rate_hz, "log (and controller) rate in Hz (default 200)");
+  app->add_option("--physics-rate", args->options.physics_rate_hz, "RK4 integration rate in Hz (default 2000)");
+  app->add_flag("--mocap", args->options.mocap, "also log motion capture: pos_x,pos_y,pos_z,roll,pitch,yaw");
+  app->add_option("--jitter-s", args->options.jitter_s, "standard deviation of the sampling instants in s (default 0)");
+  app->add_option("--excitation", args->options.excitation, "scale of the pilot's references, 0 = hover (default 1)");
+  app->add_option("--hover-lead-in-s", args->options.hover_lead_in_s,
+                  "logged hover before the pilot's references fade in, in s (default 1)");
+  app->add_option("--warmup-s", args->options.warmup_s,
+                  "unlogged flight before t = 0 so that the controller has settled, in s (default 1)");
+  app->add_option("--gravity", args->options.gravity_mps2, "g in m/s^2 (default 9.80665)");
+  app->add_flag("--quiet", args->quiet, "print nothing on success");
+  command.run = [app, args]() { return RunSimulate(*app, *args); };
   return command;
 }
 
