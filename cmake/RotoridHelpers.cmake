@@ -32,6 +32,7 @@ function(rotorid_add_test source)
   target_link_libraries(${name} PRIVATE rotorid::rotorid rotorid_test_support GTest::gtest GTest::gmock GTest::gtest_main)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/src)
   rotorid_target_options(${name})
+  add_dependencies(${name} rotorid_cli)  # end-to-end tests run the CLI binary
   # One variable per property: gtest_discover_tests splits a "A=1;B=2" ENVIRONMENT value into two
   # properties, which left ROTORID_BINARY unset.
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60

@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 
@@ -100,9 +101,9 @@ Command AddRefineCommand(CLI::App& root) {
         {"linear", LinearJson(linear)},
         {"refined", RefinedJson(linear, refined)}};
     std::vector<std::optional<double>> held_out_linear, held_out_refined;
+    std::vector<ProcessedFlight> held_out;
     if (!options->flights.validate_log_paths.empty()) {
-      const std::vector<ProcessedFlight> held_out =
-          ProcessFlights(LoadValidationFlights(options->flights, source), identify.observation);
+      held_out = ProcessFlights(LoadValidationFlights(options->flights, source), identify.observation);
       held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
       held_out_refined = RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi),
                                                   refined.effects);
@@ -110,6 +111,19 @@ Command AddRefineCommand(CLI::App& root) {
                             {"refined", {{"relative_error_pct", ComponentsJson(held_out_refined)}}}};
     }
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    if (!options->flights.report_dir.empty()) {
+      ReportInput input;
+      input.title = "rotorid refine";
+      input.report = report;
+      input.flights = ReportFlights(linear.flights, /*held_out=*/false);
+      const std::vector<ReportFlight> held_out_flights = ReportFlights(held_out, /*held_out=*/true);
+      input.flights.insert(input.flights.end(), held_out_flights.begin(), held_out_flights.end());
+      input.parameter_sets = {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
+                              {"refined", NamedParameters(linear.system, refined.refined.chi), refined.effects}};
+      ReportOptions report_options;
+      report_options.print_warnings = !options->flights.quiet;
+      WriteHtmlReport(options->flights.report_dir, input, report_options);
+    }
     if (!options->flights.quiet) {
       std::cout << "rotorid refine: " << TlsMethodName(identify.tls.method) << " TLS, then Ceres with effects "
                 << (options->effects.empty() ? "none" : options->effects) << " (" << refined.solver.iterations

@@ -3,7 +3,9 @@
 
 #include "commands.h"
 #include "rotorid/report/html_report.h"
+#include "rotorid/refine/refine.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
 
@@ -41,16 +43,22 @@ Command AddValidateCommand(CLI::App& root) {
     source.column_map_path = options->column_map;
     const std::vector<ProcessedFlight> flights =
         ProcessFlights(LoadTrainingFlights(options->flights, source), observation);
-    const auto combined = CombinedRelativeErrorPct(flights, values);
+    // Refined parameters are only valid together with their effects.
+    const bool refined = options->block == "refined" ||
+                         (options->block.empty() && params.contains("refined") && params["refined"].contains("parameters"));
+    const Effects effects = refined ? EffectsFromReport(params) : Effects{};
+    const auto combined = RelativeErrorWithEffects(flights, values, effects);
     nlohmann::json per_flight = nlohmann::json::array();
     std::vector<FlightFit> fits;
     for (const ProcessedFlight& f : flights) {
       fits.push_back(FitFlight(f, values));
+      fits.back().relative_error_pct = RelativeErrorWithEffects({f}, values, effects);
       per_flight.push_back(FlightFitJson(fits.back()));
     }
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
                              {"command", "validate"},
                              {"params", options->params_path},
+                             {"block", refined ? "refined" : "linear"},
                              {"settings", {{"observation", ObservationOptionsJson(observation)}}},
                              {"relative_error_pct", ComponentsJson(combined)},
                              {"flights", per_flight}};

@@ -40,12 +40,17 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
   context.metric = linear.solution.column_metric;
   context.total_rows = static_cast<double>(linear.system.w.rows());
   context.num_parameters = linear.system.num_parameters();
+  // The chi block is in scaled units, as in Refine.
+  context.chi_scale = linear.solution.chi.cwiseAbs();
+  for (Eigen::Index k = 0; k < context.chi_scale.size(); ++k)
+    if (context.chi_scale[k] == 0.0) context.chi_scale[k] = 1e-4;  // discarded ones: a generic point too
   const int count = 16;
   const Eigen::VectorXd sqrt_weight = linear.solution.row_weight.segment(6 * 40, 6 * count).cwiseSqrt();
   internal::IdimResidualBlock block(&flight, &cache, &context, 0, 40, count, sqrt_weight);
 
-  Eigen::VectorXd chi = linear.solution.chi * 1.03;
-  chi[0] = linear.solution.chi[0];
+  // A generic point: every scaled parameter off the TLS optimum and away from zero.
+  Eigen::VectorXd chi = Eigen::VectorXd::LinSpaced(context.num_parameters, 0.9, 1.2);
+  chi[0] = 1.0;
   double delay = 0.0131, tau = 0.0217;
   Eigen::Vector3d acc_bias(0.12, -0.31, 0.2), gyro_bias(0.01, -0.02, 0.015);
   Eigen::Vector4d quaternion = Eigen::Quaterniond(Eigen::AngleAxisd(0.04, Eigen::Vector3d(1, -2, 0.5).normalized()))
@@ -53,11 +58,16 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
   std::vector<double*> parameters = {chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(), quaternion.data()};
   ceres::EigenQuaternionManifold quaternion_manifold;
   std::vector<const ceres::Manifold*> manifolds = {nullptr, nullptr, nullptr, nullptr, nullptr, &quaternion_manifold};
+  // Ridders' extrapolation (what GradientChecker uses) starts from a step of this fraction of the
+  // value; the delay's residuals are smooth only within one sample interval (5 ms), so start well
+  // inside it.
   ceres::NumericDiffOptions numeric;
+  numeric.ridders_relative_initial_step_size = 1e-4;
   ceres::GradientChecker checker(&block, &manifolds, numeric);
   ceres::GradientChecker::ProbeResults results;
-  EXPECT_TRUE(checker.Probe(parameters.data(), 1e-6, &results)) << results.error_log;
-  EXPECT_LT(results.maximum_relative_error, 1e-6);
+  // Ridders' estimate itself is good to about 1e-5 here; a wrong derivative is off by percent.
+  EXPECT_TRUE(checker.Probe(parameters.data(), 1e-4, &results)) << results.error_log;
+  EXPECT_LT(results.maximum_relative_error, 1e-4);
 }
 
 // With every effect off the refinement minimises the TLS criterion itself: it returns the TLS
@@ -133,7 +143,9 @@ TEST_P(EffectRecoveryTest, RecoversEffectAndUnbiasesParameters) {
     const double linear_error = std::abs(linear.solution.chi[k] / truth - 1);
     const double refined_error = std::abs(refined.refined.chi[k] / truth - 1);
     // Only where the effect visibly biases the linear result (beyond 0.5 %).
-    if (linear_error > 0.005) EXPECT_LT(refined_error, linear_error / 3) << linear.system.parameter_names[k];
+    if (linear_error > 0.005) {
+      EXPECT_LT(refined_error, linear_error / 3) << linear.system.parameter_names[k];
+    }
     EXPECT_LT(refined_error, 0.02) << linear.system.parameter_names[k];
   }
 }
