@@ -1,5 +1,6 @@
 #include "rotorid/io/crazyflie_usd.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -239,20 +240,19 @@ CrazyflieUsdLog ParseCrazyflieUsd(std::string_view bytes, const std::string& sou
   log.events.reserve(std::min<size_t>(num_event_types, header.remaining() / 5));
   std::vector<Decoder> decoders;
   decoders.reserve(log.events.capacity());
-  // Event index per 16-bit id (-1: undefined): O(1) lookup per record whatever the header says.
-  std::vector<int32_t> event_of_id(65536, -1);
+  // Event index by id: a sorted (id, index) list, searched per record after a check of the
+  // previous record's id (real logs interleave one or two events). O(log E) whatever the header
+  // declares, and no table sized by the id range.
+  std::vector<std::pair<uint16_t, int32_t>> id_index;
+  std::vector<size_t> id_offsets;  // where each event type's id is written, for messages
   std::unordered_set<std::string_view> event_names;
   for (int e = 0; e < num_event_types; ++e) {
     const std::string label = "event type " + std::to_string(e + 1) + " of " + std::to_string(num_event_types);
     UsdEventTable event;
     const size_t id_offset = header.pos();
     event.id = header.U16(("the id of " + label).c_str());
-    if (event_of_id[event.id] >= 0) {
-      Fail(source, id_offset,
-           "event id " + std::to_string(event.id) + " is defined twice (" + label + " and '" +
-               Printable(log.events[event_of_id[event.id]].name) + "')");
-    }
-    event_of_id[event.id] = static_cast<int32_t>(log.events.size());
+    id_index.emplace_back(event.id, static_cast<int32_t>(log.events.size()));
+    id_offsets.push_back(id_offset);
     const size_t name_offset = header.pos();
     const std::string_view name = header.CString("the name of " + label);
     if (name.empty()) Fail(source, name_offset, "empty name for " + label);
@@ -296,6 +296,23 @@ CrazyflieUsdLog ParseCrazyflieUsd(std::string_view bytes, const std::string& sou
     decoders.push_back(std::move(decoder));
   }
   log.header_bytes = header.pos();
+  std::sort(id_index.begin(), id_index.end());
+  for (size_t k = 1; k < id_index.size(); ++k) {
+    if (id_index[k].first == id_index[k - 1].first) {
+      const UsdEventTable& first = log.events[id_index[k - 1].second];
+      const UsdEventTable& second = log.events[id_index[k].second];
+      Fail(source, id_offsets[id_index[k].second],
+           "event id " + std::to_string(first.id) + " is defined twice ('" + Printable(first.name) + "' and '" +
+               Printable(second.name) + "')");
+    }
+  }
+  int32_t last_index = -1;
+  auto event_of_id = [&](uint16_t id) -> int32_t {
+    if (last_index >= 0 && log.events[last_index].id == id) return last_index;
+    const auto it = std::lower_bound(id_index.begin(), id_index.end(), std::make_pair(id, int32_t{-1}));
+    if (it == id_index.end() || it->first != id) return -1;
+    return last_index = it->second;
+  };
 
   // Records, in two passes: the first validates framing and counts records per event, so that
   // the second decodes into columns allocated once (no allocation per record).
@@ -309,7 +326,7 @@ CrazyflieUsdLog ParseCrazyflieUsd(std::string_view bytes, const std::string& sou
                " are left before the CRC (truncated record)");
     }
     const uint16_t id = LoadU16(data + pos);
-    const int32_t index = event_of_id[id];
+    const int32_t index = event_of_id(id);
     if (index < 0) {
       std::string defined;
       for (size_t k = 0; k < num_events && k < 8; ++k)
@@ -336,7 +353,7 @@ CrazyflieUsdLog ParseCrazyflieUsd(std::string_view bytes, const std::string& sou
   }
   std::vector<size_t> rows(num_events, 0);
   for (size_t pos = log.header_bytes; pos < end;) {
-    const int32_t index = event_of_id[LoadU16(data + pos)];  // validated above
+    const int32_t index = event_of_id(LoadU16(data + pos));  // validated above
     UsdEventTable& event = log.events[index];
     const Decoder& decoder = decoders[index];
     const size_t row = rows[index]++;

@@ -208,7 +208,7 @@ TEST(CrazyflieUsd, CorruptFilesGiveNamedErrors) {
   ExpectError(bad_variable.Finish(), "is 'gyro.x', expected 'name(T)'");
   UsdBuilder twice_id;
   twice_id.U16(2).Event(1, "a", {}).Event(1, "b", {});
-  ExpectError(twice_id.Finish(), "event id 1 is defined twice");
+  ExpectError(twice_id.Finish(), "byte 11: event id 1 is defined twice ('a' and 'b')");
   UsdBuilder twice_name;
   twice_name.U16(2).Event(1, "a", {}).Event(2, "a", {});
   ExpectError(twice_name.Finish(), "event name 'a' is defined twice");
