@@ -1,6 +1,9 @@
 # Compile options for our own code only (dependencies are never built with -Werror or sanitizers).
 function(rotorid_target_options target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wnon-virtual-dtor)
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    target_compile_options(${target} PRIVATE -Wshadow=local)
+  endif()
   if(ROTORID_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
