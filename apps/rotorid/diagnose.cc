@@ -1,15 +1,94 @@
-#include "commands.h"
+#include <iostream>
+#include <memory>
 
+#include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/diagnosis/diagnosis.h"
+#include "rotorid/diagnosis/diagnosis_json.h"
+#include "rotorid/report/html_report.h"
+#include "rotorid/report/json.h"
+#include "rotorid/report/progress.h"
 
 namespace rotorid::cli {
 
-// Placeholder until the diagnose issue lands: registers the subcommand and refuses to run.
 Command AddDiagnoseCommand(CLI::App& root) {
+  struct Options {
+    FlightOptions flights;
+    IdentifyCliOptions identify;
+    std::string effects = "all";
+    DiagnosisOptions diagnosis;
+  };
+  auto options = std::make_shared<Options>();
   Command command;
-  command.app = root.add_subcommand("diagnose", "diagnose (not yet available)");
-  command.app->allow_extras();
-  command.run = [] () -> int { throw Error("'diagnose' is not available in this build yet"); };
+  command.app = root.add_subcommand(
+      "diagnose", "the sim-to-real gap: where the model's residual lies (component, frequency band, stretch of the "
+                  "flight), which unmodelled effect causes it (judged on held-out data) and how far the held-out gap "
+                  "shrinks once it is added");
+  AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
+  AddIdentifyOptions(command.app, &options->identify);
+  DiagnosisOptions& d = options->diagnosis;
+  command.app->add_option("--effects", options->effects,
+                          "candidate effects: all, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
+      ->capture_default_str();
+  command.app->add_option("--folds", d.folds, "time-blocked held-out folds per flight (without --validate-log)")
+      ->capture_default_str();
+  command.app->add_option("--guard-s", d.guard_s, "seconds left out of the training data around a held-out block")
+      ->capture_default_str();
+  command.app->add_option("--alpha", d.alpha, "level of the F-test of each added effect")->capture_default_str();
+  command.app->add_option("--min-shrink", d.min_shrink_pct,
+                          "held-out gap reduction (%) an effect must exceed to be kept")
+      ->capture_default_str();
+  command.app->add_option("--max-effects", d.max_effects, "most effects the forward selection keeps")
+      ->capture_default_str();
+  command.app->add_option("--window-s", d.location.window_s, "length of the stretches of the flight (s)")
+      ->capture_default_str();
+  command.app->add_option("--threads", d.num_threads, "refinements run in parallel")->capture_default_str();
+  command.run = [options]() {
+    DiagnosisOptions diagnosis = options->diagnosis;
+    diagnosis.identify = ResolveIdentifyOptions(&options->identify);
+    diagnosis.candidates = ParseEffectList(options->effects);
+    if (const std::string problem = diagnosis.Validate(); !problem.empty()) throw Error(problem);
+    const FlightSourceOptions source = SourceOptions(options->identify);
+    const std::vector<ProcessedFlight> flights =
+        ProcessFlights(LoadTrainingFlights(options->flights, source), diagnosis.identify.observation);
+    std::vector<ProcessedFlight> held_out;
+    if (!options->flights.validate_log_paths.empty())
+      held_out = ProcessFlights(LoadValidationFlights(options->flights, source), diagnosis.identify.observation);
+
+    Progress progress("diagnose", 0, options->flights.quiet);
+    const Diagnosis result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
+    progress.Finish();
+
+    nlohmann::json report = DiagnosisJson(result);
+    report["rotorid_version"] = kRotoridVersion;
+    report["command"] = "diagnose";
+    report["settings"] = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
+                          {"tls", TlsOptionsJson(diagnosis.identify.tls)},
+                          {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
+    if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    std::string report_path;
+    if (!options->flights.report_dir.empty()) {
+      ReportInput input;
+      input.title = "rotorid diagnose";
+      input.report = report;
+      input.flights = ReportFlights(flights, /*held_out=*/false);
+      for (ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) input.flights.push_back(f);
+      input.parameter_sets = {{"linear", result.linear_parameters, Effects()}};
+      if (!result.selected.empty())
+        input.parameter_sets.push_back({"with selected effects", result.final_parameters, result.final_effects});
+      ReportOptions report_options;
+      report_options.print_warnings = !options->flights.quiet;
+      report_path = WriteHtmlReport(options->flights.report_dir, input, report_options).html_path;
+    }
+    if (!options->flights.quiet) {
+      std::cout << "rotorid diagnose: " << TlsMethodName(diagnosis.identify.tls.method) << " TLS, candidates "
+                << options->effects << "; " << result.refinements << " refinements in " << result.seconds << " s\n";
+      std::cout << DiagnosisVerdict(result);
+      PrintWarnings(result.warnings);
+      if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
+    }
+    return 0;
+  };
   return command;
 }
 

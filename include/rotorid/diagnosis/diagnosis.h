@@ -1,0 +1,197 @@
+#pragma once
+
+// Diagnosis of the sim-to-real gap (MODEL.md section 5): where the rigid-body + rotor model's
+// residual lies, which unmodelled effect causes it, and how far the held-out gap shrinks once that
+// effect is added. docs/diagnosis.md explains how to read the result.
+//
+//   DiagnosisOptions options;                       // all candidate effects, 4 time-blocked folds
+//   Diagnosis d = Diagnose(ProcessFlights(flights, options.identify.observation), {}, options);
+//   std::cout << DiagnosisVerdict(d);
+//
+// Which effect is judged only on data that was not used to fit it: K contiguous blocks of every
+// flight (each block is held out in turn, the model refined on the others) or separate held-out
+// flights. Effects enter by forward selection: every candidate is refined on top of the effects
+// selected so far, the one that removes the most held-out residual is kept when an F-test on the
+// whitened held-out residuals (effective sample size corrected for autocorrelation, charged for
+// the parameters the effect adds) is significant and its held-out shrink exceeds a floor learned
+// from clean simulated flights.
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rotorid/diagnosis/gap_location.h"
+#include "rotorid/ident/identify.h"
+#include "rotorid/model/effects.h"
+
+namespace rotorid {
+
+struct DiagnosisOptions {
+  // Signal processing and TLS of the linear model (the baseline).
+  IdentifyOptions identify;
+  // Effects considered as causes of the gap.
+  std::vector<EffectKind> candidates = {kAllEffectKinds.begin(), kAllEffectKinds.end()};
+  // Time-blocked folds per flight when no held-out flights are given.
+  int folds = 4;
+  // Rows within this many seconds of a held-out block are left out of its training data, so that
+  // the low-pass filter's memory does not leak the held-out residual into the fit.
+  double guard_s = 0.5;
+  // Level of the F-test of each added effect (one-sided; about 5 candidates x 3 steps share it).
+  double alpha = 1e-3;
+  // Held-out gap reduction (% of the whitened residual) an effect must exceed to be kept, learned
+  // from clean simulated flights (docs/diagnosis.md): below it, improvements are of the size that
+  // small simulation/model mismatches produce on clean data.
+  double min_shrink_pct = 0.3;
+  // Candidates whose first-order (linearised) in-sample shrink on top of the current model is below
+  // this fraction of min_shrink_pct are not refined in the folds: an effect removes less residual out
+  // of sample than in sample, so they cannot pass. Saves most of the refinements on clean data.
+  double screen_fraction = 0.5;
+  // ... and so are those whose first-order shrink is below this fraction of the best candidate's at
+  // that step: they cannot remove the most held-out residual (they are refined at the next step, on
+  // top of the winner, if they pass the screening there).
+  double rival_fraction = 0.7;
+  // Forward selection stops after this many effects.
+  int max_effects = 3;
+  // Start of the delay (and lag) candidate in the folds: a coarse search of the TLS criterion.
+  double delay_search_min_s = -0.05;
+  double delay_search_max_s = 0.15;
+  double delay_search_step_s = 0.005;
+  // Ceres iterations per fold refinement (warm-started, they rarely need more; the nearly flat
+  // delay/lag ridge is where more would be spent for no change of the criterion).
+  int refine_max_iterations = 20;
+  // RefineOptions::reselect_essential in the fold refinements: parameters an effect made
+  // unidentifiable in the linear model (a motor lag spoils kd and I_zz) come back, so the held-out
+  // gap with the effect is the one `rotorid refine` would reach. Off: about half the cost.
+  bool reselect_essential = true;
+  // Where: frequency bands, stretches of the flight.
+  GapLocationOptions location;
+  // Refinements run in parallel on this many threads.
+  int num_threads = 2;
+
+  std::string Validate() const;
+};
+
+// The held-out gap of one model: pooled over all held-out blocks (or flights).
+struct HeldOutGap {
+  std::vector<std::optional<double>> relative_error_pct;  // Table III per component (null: 0 denominator)
+  std::vector<std::optional<double>> gap_pct;             // as relative_error_pct; Fx, Fy against the thrust
+  Eigen::Matrix<double, 6, 1> residual_rms = Eigen::Matrix<double, 6, 1>::Zero();  // N or N m
+  // The part of the gap that the sensor noise alone explains (from the noise levels of the signals
+  // propagated through the regressor) and the rest, sqrt(max(0, gap^2 - floor^2)): the model error.
+  std::vector<std::optional<double>> noise_floor_pct;
+  std::vector<std::optional<double>> model_error_pct;
+  double whitened_ssr = 0.0;  // sum of squared residuals, each flight and component scaled so that the
+                              // baseline's mean square is 1
+  int entries = 0;            // residual entries (6 per held-out row sample)
+  double autocorrelation_factor = 1.0;  // variance inflation of the whitened residuals
+};
+
+// Whether adding effects to a model removes significantly more held-out residual than noise.
+struct EffectTest {
+  double shrink_pct = 0.0;        // 100 (1 - SSR_with / SSR_without), whitened held-out residual
+  double f_statistic = 0.0;       // ((SSR_without - SSR_with) / q) / (SSR_with / (n_eff - q))
+  double p_value = 1.0;
+  int added_parameters = 0;       // q
+  double effective_samples = 0.0;  // n_eff = entries / autocorrelation factor
+  bool significant = false;       // p < alpha and shrink_pct > min_shrink_pct
+  // Not refined in the folds: shrink_pct, F and p are the linearised in-sample ones (a score test),
+  // which were below the screening threshold.
+  bool screened = false;
+};
+
+// One candidate effect, as the diagnosis judged it.
+struct EffectVerdict {
+  EffectKind kind = EffectKind::kDelay;
+  // "selected", "confounded" (significant alone, but indistinguishable from a selected effect) or
+  // "not significant".
+  std::string status;
+  bool selected = false;
+  bool significant = false;
+  int step = 0;           // forward-selection step at which it was last tested (1-based)
+  std::vector<EffectKind> tested_on_top_of;  // the effects already selected at that step
+  EffectTest test;        // added on top of tested_on_top_of
+  std::optional<EffectTest> alone_test;  // added to the linear model alone (step 1)
+  EffectTest screening;                  // first-order in-sample test at `step` (always computed)
+  // Magnitude: selected effects from the final fit on all data, the others the mean of their fold
+  // fits; std from the linearised criterion (chi and the selected effects profiled out, inflated
+  // for autocorrelation).
+  Eigen::VectorXd value;
+  Eigen::VectorXd std;
+  // Smallest size per parameter that this data would reveal as significant (F-test and shrink
+  // floor), from the same linearisation.
+  Eigen::VectorXd detectable_above;
+  std::vector<std::optional<double>> relative_error_pct;  // held-out, with it added
+  std::vector<EffectKind> confounded_with;
+  std::string note;  // one line for people
+};
+
+struct ConfoundedEffects {
+  EffectKind selected = EffectKind::kDelay;
+  EffectKind other = EffectKind::kMotorLag;
+  // Largest |correlation| between their parameters with both in the final model (linearised
+  // criterion on all data), with the labels it occurs between.
+  std::optional<double> correlation;
+  std::string correlated_labels;
+  double selected_shrink_pct = 0.0;  // each alone on top of the same model, held-out
+  double other_shrink_pct = 0.0;
+  // Paired comparison of their held-out residuals (per row sample, autocorrelation-robust
+  // variance): t > 0 when `selected` fits better; distinguishable when p < alpha.
+  double t_statistic = 0.0;
+  double p_value = 1.0;
+  bool distinguishable = false;
+  std::string note;
+};
+
+// One forward-selection step that kept an effect: the held-out gap before and after.
+struct SelectionStep {
+  EffectKind added = EffectKind::kDelay;
+  HeldOutGap before;
+  HeldOutGap after;
+  EffectTest test;
+};
+
+struct Diagnosis {
+  std::string validation;  // "4 time-blocked folds of 1 flight" or "2 held-out flights"
+  int held_out_row_samples = 0;
+  std::vector<EffectKind> candidates;
+  HeldOutGap baseline;     // linear model, held-out
+  int where_component = 0;  // largest baseline model_error_pct (the gap beyond the noise floor)
+  GapLocation where;
+  std::vector<EffectVerdict> ranking;  // selected in order, then the others by shrink
+  std::vector<EffectKind> selected;
+  std::vector<SelectionStep> steps;
+  HeldOutGap final_gap;    // with the selected effects, held-out
+  // The final model fitted on all identification data.
+  std::map<std::string, double> linear_parameters;
+  std::map<std::string, double> final_parameters;
+  Effects final_effects;
+  Effects final_effects_std;
+  std::vector<ConfoundedEffects> confounded;
+  double initial_delay_s = 0.0;  // coarse delay search result
+  int refinements = 0;
+  double seconds = 0.0;
+  std::vector<std::pair<std::string, double>> phase_seconds;  // where the time went
+  std::vector<std::string> warnings;
+};
+
+// Called after each piece of work (refinement or fold identification) with the count done so far.
+using DiagnosisProgress = std::function<void(int done)>;
+
+// Diagnoses the identification flights; `held_out` (may be empty) replaces the time-blocked folds.
+// Throws rotorid::Error on invalid options, when the linear model cannot be identified, or when a
+// held-out flight's configuration is not among the identification flights.
+Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vector<ProcessedFlight>& held_out,
+                   const DiagnosisOptions& options, const DiagnosisProgress& progress = {});
+
+// A short human verdict: which component, which band and stretch, which effect with its magnitude
+// and std, the shrink, and the held-out gap per component before and after.
+std::string DiagnosisVerdict(const Diagnosis& diagnosis);
+
+// Formats an effect's value with std in the effect's natural unit ("12.31 +- 0.14 ms").
+std::string FormatEffectMagnitude(EffectKind kind, const Eigen::VectorXd& value, const Eigen::VectorXd& std);
+
+}  // namespace rotorid

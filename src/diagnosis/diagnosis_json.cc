@@ -1,0 +1,189 @@
+#include "rotorid/diagnosis/diagnosis_json.h"
+
+#include "rotorid/model/parameters.h"
+
+namespace rotorid {
+
+namespace {
+
+using nlohmann::json;
+
+json Components(const std::vector<std::optional<double>>& values) {
+  json out = json::object();
+  for (size_t j = 0; j < values.size() && j < kWrenchComponentNames.size(); ++j)
+    out[kWrenchComponentNames[j]] = values[j] ? json(*values[j]) : json(nullptr);
+  return out;
+}
+
+json Components(const ComponentVector& values) {
+  json out = json::object();
+  for (int j = 0; j < kNumWrenchComponents; ++j) out[kWrenchComponentNames[j]] = values[j];
+  return out;
+}
+
+// A scalar effect parameter as a number, a vector one as [x, y, z].
+json EffectValue(const Eigen::VectorXd& v) {
+  if (v.size() == 1) return v[0];
+  json out = json::array();
+  for (Eigen::Index k = 0; k < v.size(); ++k) out.push_back(v[k]);
+  return out;
+}
+
+json Kinds(const std::vector<EffectKind>& kinds) {
+  json out = json::array();
+  for (EffectKind kind : kinds) out.push_back(EffectName(kind));
+  return out;
+}
+
+json GapJson(const HeldOutGap& gap) {
+  return {{"relative_error_pct", Components(gap.relative_error_pct)},
+          {"gap_pct", Components(gap.gap_pct)},
+          {"noise_floor_pct", Components(gap.noise_floor_pct)},
+          {"model_error_pct", Components(gap.model_error_pct)},
+          {"residual_rms", Components(gap.residual_rms)},
+          {"whitened_ssr", gap.whitened_ssr},
+          {"entries", gap.entries},
+          {"autocorrelation_factor", gap.autocorrelation_factor}};
+}
+
+json TestJson(const EffectTest& test) {
+  return {{"shrink_pct", test.shrink_pct},           {"f_statistic", test.f_statistic},
+          {"p_value", test.p_value},                 {"added_parameters", test.added_parameters},
+          {"effective_samples", test.effective_samples}, {"significant", test.significant},
+          {"screened", test.screened}};
+}
+
+json LocationJson(const GapLocation& where) {
+  json bands = json::array();
+  for (const BandGap& b : where.bands)
+    bands.push_back({{"low_hz", b.low_hz},
+                     {"high_hz", b.high_hz},
+                     {"residual_rms", Components(b.residual_rms)},
+                     {"final_residual_rms", Components(b.final_residual_rms)},
+                     {"model_rms", Components(b.model_rms)},
+                     {"share_pct", Components(b.share_pct)},
+                     {"residual_to_model_pct", Components(b.residual_to_model_pct)}});
+  json stretches = json::array();
+  for (const FlightStretch& s : where.worst_stretches)
+    stretches.push_back({{"flight", s.flight},
+                         {"start_s", s.start_s},
+                         {"end_s", s.end_s},
+                         {"mean_square_ratio", s.mean_square_ratio},
+                         {"dominant_component", kWrenchComponentNames[s.dominant_component]},
+                         {"relative_error_pct", Components(s.relative_error_pct)},
+                         {"angular_velocity_rms", EffectValue(s.angular_velocity_rms)},
+                         {"mean_vertical_acceleration_mps2", s.mean_vertical_acceleration_mps2},
+                         {"activities", s.activities}});
+  json signatures = json::array();
+  for (const EffectSignature& s : where.signatures) {
+    json parameters = json::object();
+    for (size_t k = 0; k < s.labels.size(); ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      parameters[s.labels[k]] = {{"residual_correlation", s.residual_correlation[i]},
+                                 {"linearized_estimate", s.linearized_estimate[i]},
+                                 {"linearized_std", s.linearized_std[i]}};
+    }
+    signatures.push_back({{"effect", EffectName(s.kind)},
+                          {"parameters", parameters},
+                          {"linearized_shrink_pct", s.linearized_shrink_pct},
+                          {"component_share_pct", Components(s.component_share_pct)}});
+  }
+  return {{"in_sample_relative_error_pct", Components(where.relative_error_pct)},
+          {"bands", bands},
+          {"worst_stretches", stretches},
+          {"signatures", signatures}};
+}
+
+}  // namespace
+
+json DiagnosisOptionsJson(const DiagnosisOptions& o) {
+  json bands = json::array();
+  for (const auto& [low, high] : o.location.bands) bands.push_back({low, high});
+  return {{"candidates", Kinds(o.candidates)},
+          {"folds", o.folds},
+          {"guard_s", o.guard_s},
+          {"alpha", o.alpha},
+          {"min_shrink_pct", o.min_shrink_pct},
+          {"max_effects", o.max_effects},
+          {"screen_fraction", o.screen_fraction},
+          {"rival_fraction", o.rival_fraction},
+          {"delay_search", {o.delay_search_min_s, o.delay_search_max_s, o.delay_search_step_s}},
+          {"refine_max_iterations", o.refine_max_iterations},
+          {"reselect_essential", o.reselect_essential},
+          {"bands_hz", bands},
+          {"window_s", o.location.window_s},
+          {"window_step_s", o.location.window_step_s},
+          {"num_threads", o.num_threads}};
+}
+
+json DiagnosisJson(const Diagnosis& d) {
+  json ranking = json::array();
+  for (const EffectVerdict& v : d.ranking) {
+    const std::string name = EffectParameterName(v.kind);
+    json entry = {{"effect", EffectName(v.kind)},
+                  {"status", v.status},
+                  {"significant", v.significant},
+                  {"shrink_pct", v.test.shrink_pct},
+                  {"magnitude", {{name, {{"value", EffectValue(v.value)}, {"std", EffectValue(v.std)}}}}},
+                  {"detectable_above", {{name, EffectValue(v.detectable_above)}}},
+                  {"step", v.step},
+                  {"tested_on_top_of", Kinds(v.tested_on_top_of)},
+                  {"test", TestJson(v.test)},
+                  {"screening", TestJson(v.screening)},
+                  {"relative_error_pct", Components(v.relative_error_pct)},
+                  {"confounded_with", Kinds(v.confounded_with)},
+                  {"note", v.note}};
+    entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
+    ranking.push_back(entry);
+  }
+  json steps = json::array();
+  for (const SelectionStep& s : d.steps)
+    steps.push_back({{"added", EffectName(s.added)},
+                     {"shrink_pct", s.test.shrink_pct},
+                     {"test", TestJson(s.test)},
+                     {"before", {{"relative_error_pct", Components(s.before.relative_error_pct)},
+                                 {"gap_pct", Components(s.before.gap_pct)}}},
+                     {"after", {{"relative_error_pct", Components(s.after.relative_error_pct)},
+                                {"gap_pct", Components(s.after.gap_pct)}}}});
+  json confounded = json::array();
+  for (const ConfoundedEffects& c : d.confounded)
+    confounded.push_back({{"effects", {EffectName(c.selected), EffectName(c.other)}},
+                          {"correlation", c.correlation ? json(*c.correlation) : json(nullptr)},
+                          {"correlated_parameters", c.correlated_labels},
+                          {"shrink_pct", {c.selected_shrink_pct, c.other_shrink_pct}},
+                          {"t_statistic", c.t_statistic},
+                          {"p_value", c.p_value},
+                          {"distinguishable", c.distinguishable},
+                          {"note", c.note}});
+  json final_effects = json::object();
+  for (EffectKind kind : d.selected)
+    final_effects[EffectParameterName(kind)] = {{"value", EffectValue(d.final_effects.Get(kind))},
+                                                {"std", EffectValue(d.final_effects_std.Get(kind))}};
+  json where = LocationJson(d.where);
+  where["component"] = kWrenchComponentNames[d.where_component];
+  where["gap_pct"] = Components(d.baseline.gap_pct);
+  where["model_error_pct"] = Components(d.baseline.model_error_pct);
+  json final_block = GapJson(d.final_gap);
+  final_block["effects"] = final_effects;
+  final_block["parameters"] = d.final_parameters;
+  json baseline = GapJson(d.baseline);
+  baseline["parameters"] = d.linear_parameters;
+  return {{"validation", d.validation},
+          {"held_out_row_samples", d.held_out_row_samples},
+          {"candidates", Kinds(d.candidates)},
+          {"baseline", baseline},
+          {"where", where},
+          {"ranking", ranking},
+          {"selected", Kinds(d.selected)},
+          {"steps", steps},
+          {"confounded", confounded},
+          {"final", final_block},
+          {"initial_delay_s", d.initial_delay_s},
+          {"refinements", d.refinements},
+          {"seconds", d.seconds},
+          {"phase_seconds", d.phase_seconds},
+          {"warnings", d.warnings},
+          {"verdict", DiagnosisVerdict(d)}};
+}
+
+}  // namespace rotorid

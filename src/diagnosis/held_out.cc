@@ -1,0 +1,207 @@
+#include "diagnosis/held_out.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "diagnosis/statistics.h"
+#include "rotorid/core/error.h"
+#include "rotorid/ident/identify.h"
+
+namespace rotorid::internal {
+
+namespace {
+constexpr int kComponents = 6;
+constexpr int kFz = 2;
+}  // namespace
+
+ProcessedFlight WithRowSamples(const ProcessedFlight& flight, std::vector<int> row_samples) {
+  ProcessedFlight out = flight;
+  out.row_samples = std::move(row_samples);
+  return out;
+}
+
+std::vector<Fold> TimeBlockedFolds(const std::vector<ProcessedFlight>& flights, int folds, double guard_s) {
+  if (folds < 2) throw Error("time-blocked folds: need at least 2 folds, got " + std::to_string(folds));
+  std::vector<Fold> out(folds);
+  for (size_t f = 0; f < flights.size(); ++f) {
+    const ProcessedFlight& flight = flights[f];
+    const int n = flight.num_rows_samples();
+    if (n < 4 * folds)
+      throw Error(flight.source + ": " + std::to_string(n) + " row samples are too few for " + std::to_string(folds) +
+                  " held-out folds");
+    const double row_dt =
+        (flight.t_s[flight.row_samples[n - 1]] - flight.t_s[flight.row_samples[0]]) / std::max(1, n - 1);
+    const int guard = row_dt > 0.0 ? static_cast<int>(std::ceil(guard_s / row_dt)) : 0;
+    for (int k = 0; k < folds; ++k) {
+      const int first = static_cast<int>(static_cast<long>(k) * n / folds);
+      const int last = static_cast<int>(static_cast<long>(k + 1) * n / folds);
+      std::vector<int> held, train;
+      for (int r = 0; r < n; ++r) {
+        if (r >= first && r < last)
+          held.push_back(flight.row_samples[r]);
+        else if (r < first - guard || r >= last + guard)
+          train.push_back(flight.row_samples[r]);
+      }
+      out[k].train.push_back(WithRowSamples(flight, std::move(train)));
+      out[k].evaluate.push_back(WithRowSamples(flight, std::move(held)));
+      out[k].evaluate_flight.push_back(static_cast<int>(f));
+    }
+  }
+  return out;
+}
+
+int HeldOutResidual::row_samples() const {
+  int rows = 0;
+  for (const FlightResidual& s : segments) rows += static_cast<int>(s.residual.rows());
+  return rows;
+}
+
+Eigen::MatrixXd HeldOutScales(const HeldOutResidual& baseline, int num_flights) {
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(num_flights, kComponents);
+  Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(num_flights, kComponents);
+  for (size_t s = 0; s < baseline.segments.size(); ++s) {
+    const int f = baseline.flight[s];
+    const Eigen::MatrixXd& r = baseline.segments[s].residual;
+    for (int j = 0; j < kComponents; ++j) {
+      if (!baseline.scored[s][j]) continue;
+      sum(f, j) += r.col(j).squaredNorm();
+      rows(f, j) += static_cast<double>(r.rows());
+    }
+  }
+  Eigen::MatrixXd scales = Eigen::MatrixXd::Ones(num_flights, kComponents);
+  for (int f = 0; f < num_flights; ++f)
+    for (int j = 0; j < kComponents; ++j)
+      if (rows(f, j) > 0.0 && sum(f, j) > 0.0) scales(f, j) = std::sqrt(sum(f, j) / rows(f, j));
+  return scales;
+}
+
+std::vector<std::optional<double>> RelativeErrorFromSums(const ComponentVector& residual_sq,
+                                                         const ComponentVector& wrench_sq) {
+  std::vector<std::optional<double>> out(kComponents);
+  for (int j = 0; j < kComponents; ++j)
+    if (wrench_sq[j] > 0.0) out[j] = 100.0 * std::sqrt(residual_sq[j] / wrench_sq[j]);
+  return out;
+}
+
+std::vector<std::optional<double>> GapFromSums(const ComponentVector& residual_sq, const ComponentVector& wrench_sq) {
+  std::vector<std::optional<double>> out = RelativeErrorFromSums(residual_sq, wrench_sq);
+  // The rotor model has no horizontal force: measure Fx and Fy against the thrust.
+  for (int j = 0; j < 2; ++j)
+    if (wrench_sq[kFz] > 0.0) out[j] = 100.0 * std::sqrt(residual_sq[j] / wrench_sq[kFz]);
+  return out;
+}
+
+ComponentVector NoiseResidualSquares(const ProcessedFlight& flight, const std::map<std::string, double>& parameters) {
+  const std::vector<Eigen::MatrixXd> covariance = IdimNoiseCovariance(flight);
+  const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+  ComponentVector out;
+  for (int j = 0; j < kComponents; ++j) out[j] = std::max(0.0, chi_t.dot(covariance[j] * chi_t));
+  return out;
+}
+
+HeldOutGap ScoreHeldOut(const HeldOutResidual& residual, const Eigen::MatrixXd& scales, const ComponentVector& noise_sq) {
+  HeldOutGap gap;
+  ComponentVector residual_sq = ComponentVector::Zero(), wrench_sq = ComponentVector::Zero();
+  std::vector<std::vector<Eigen::VectorXd>> scaled(kComponents);
+  int rows = 0;
+  for (size_t s = 0; s < residual.segments.size(); ++s) {
+    const FlightResidual& segment = residual.segments[s];
+    const int f = residual.flight[s];
+    rows += static_cast<int>(segment.residual.rows());
+    for (int j = 0; j < kComponents; ++j) {
+      residual_sq[j] += segment.residual.col(j).squaredNorm();
+      wrench_sq[j] += segment.rotor_wrench.col(j).squaredNorm();
+      if (!residual.scored[s][j]) continue;
+      Eigen::VectorXd series = segment.residual.col(j) / scales(f, j);
+      gap.whitened_ssr += series.squaredNorm();
+      gap.entries += static_cast<int>(series.size());
+      scaled[j].push_back(std::move(series));
+    }
+  }
+  gap.relative_error_pct = RelativeErrorFromSums(residual_sq, wrench_sq);
+  gap.gap_pct = GapFromSums(residual_sq, wrench_sq);
+  gap.noise_floor_pct = GapFromSums(noise_sq, wrench_sq);
+  gap.model_error_pct = GapFromSums((residual_sq - noise_sq).cwiseMax(0.0), wrench_sq);
+  if (rows > 0) gap.residual_rms = (residual_sq / rows).cwiseSqrt();
+  double factor = 0.0;
+  int scored_components = 0;
+  for (int j = 0; j < kComponents; ++j) {
+    if (scaled[j].empty()) continue;
+    factor += AutocorrelationFactor(scaled[j]);
+    ++scored_components;
+  }
+  gap.autocorrelation_factor = scored_components > 0 ? factor / scored_components : 1.0;
+  return gap;
+}
+
+EffectTest TestAddedEffects(const HeldOutGap& without, const HeldOutGap& with, int added_parameters, double alpha,
+                            double min_shrink_pct) {
+  EffectTest test;
+  test.added_parameters = added_parameters;
+  const double n = static_cast<double>(with.entries);
+  test.effective_samples = n / std::max(1.0, with.autocorrelation_factor);
+  const double removed = without.whitened_ssr - with.whitened_ssr;
+  test.shrink_pct = without.whitened_ssr > 0.0 ? 100.0 * removed / without.whitened_ssr : 0.0;
+  const double q = static_cast<double>(added_parameters);
+  if (removed > 0.0 && q > 0.0 && with.whitened_ssr > 0.0 && test.effective_samples > q + 1.0) {
+    test.f_statistic =
+        (removed / q) / (std::max(1.0, with.autocorrelation_factor) * with.whitened_ssr / (n - q));
+    test.p_value = FSurvival(test.f_statistic, q, test.effective_samples - q);
+  }
+  test.significant = test.p_value < alpha && test.shrink_pct > min_shrink_pct;
+  return test;
+}
+
+PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const Eigen::MatrixXd& scales) {
+  if (a.segments.size() != b.segments.size()) throw Error("held-out comparison of different row sets");
+  std::vector<Eigen::VectorXd> differences;
+  double sum = 0.0;
+  Eigen::Index n = 0;
+  for (size_t s = 0; s < a.segments.size(); ++s) {
+    const Eigen::MatrixXd& ra = a.segments[s].residual;
+    const Eigen::MatrixXd& rb = b.segments[s].residual;
+    if (ra.rows() != rb.rows()) throw Error("held-out comparison of different row sets");
+    Eigen::RowVectorXd inverse_scale = scales.row(a.flight[s]).cwiseInverse();
+    for (int j = 0; j < kComponents; ++j)
+      if (!a.scored[s][j]) inverse_scale[j] = 0.0;
+    Eigen::VectorXd d(ra.rows());
+    for (Eigen::Index r = 0; r < ra.rows(); ++r)
+      d[r] = rb.row(r).cwiseProduct(inverse_scale).squaredNorm() - ra.row(r).cwiseProduct(inverse_scale).squaredNorm();
+    sum += d.sum();
+    n += d.size();
+    differences.push_back(std::move(d));
+  }
+  PairedComparison out;
+  if (n < 2) return out;
+  out.mean_difference = sum / static_cast<double>(n);
+  for (Eigen::VectorXd& d : differences) d.array() -= out.mean_difference;
+  double variance = 0.0;
+  for (const Eigen::VectorXd& d : differences) variance += d.squaredNorm();
+  variance /= static_cast<double>(n);
+  const double long_run = variance * AutocorrelationFactor(differences);
+  if (!(long_run > 0.0)) return out;
+  out.t_statistic = out.mean_difference / std::sqrt(long_run / static_cast<double>(n));
+  out.p_value = 0.5 * std::erfc(out.t_statistic / std::sqrt(2.0));
+  return out;
+}
+
+EffectTest ScreeningTest(double shrink_fraction, int added_parameters, double effective_samples, Eigen::Index rows,
+                         double alpha, double min_shrink_pct) {
+  EffectTest test;
+  test.screened = true;
+  test.added_parameters = added_parameters;
+  test.effective_samples = effective_samples;
+  test.shrink_pct = 100.0 * shrink_fraction;
+  const double q = added_parameters, n = static_cast<double>(rows);
+  const double factor = effective_samples > 0.0 ? n / effective_samples : 1.0;
+  if (shrink_fraction > 0.0 && shrink_fraction < 1.0 && effective_samples > q + 1.0) {
+    test.f_statistic = shrink_fraction / (1.0 - shrink_fraction) * (n - q) / (q * factor);
+    test.p_value = FSurvival(test.f_statistic, q, effective_samples - q);
+  }
+  test.significant = false;  // only held-out data can make an effect significant
+  (void)alpha;
+  (void)min_shrink_pct;
+  return test;
+}
+
+}  // namespace rotorid::internal

@@ -1,0 +1,243 @@
+#include "diagnosis/linearization.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+
+#include "diagnosis/statistics.h"
+#include "rotorid/core/error.h"
+#include "rotorid/ident/identify.h"
+#include "rotorid/model/parameters.h"
+#include "rotorid/model/rigid_body.h"
+#include "rotorid/refine/effect_model.h"
+
+namespace rotorid::internal {
+
+namespace {
+
+constexpr int kComponents = kNumWrenchComponents;
+
+// Central-difference steps: small against realistic sizes, large against round-off. Biases enter
+// the rows at most quadratically and the rotor signal piecewise linearly in delay, so central
+// differences are (nearly) exact.
+double DifferenceStep(EffectKind kind) {
+  switch (kind) {
+    case EffectKind::kDelay: return 2e-4;
+    case EffectKind::kMotorLag: return 2e-4;
+    case EffectKind::kAccBias: return 1e-2;
+    case EffectKind::kGyroBias: return 1e-3;
+    case EffectKind::kMisalignment: return 1e-3;
+  }
+  return 1e-4;
+}
+
+bool ActsOnRotorSignal(EffectKind kind) { return kind == EffectKind::kDelay || kind == EffectKind::kMotorLag; }
+
+// Column of W that a named parameter multiplies in this flight, or -1.
+int ColumnOf(const std::string& name, const Vehicle& vehicle) {
+  for (int k = 0; k < kNumRotorCoefficients; ++k)
+    if (name == kRotorCoefficientNames[k]) return k;
+  for (int k = 0; k < kNumBodyParameters; ++k)
+    if (name == vehicle.name + "." + kBodyParameterNames[k]) return kNumRotorCoefficients + k;
+  return -1;
+}
+
+// (J^T J)^+ with the columns equilibrated first, so that the pseudo-inverse threshold is relative
+// to each column's own scale.
+Eigen::MatrixXd NormalInverse(const Eigen::MatrixXd& j) {
+  const Eigen::Index n = j.cols();
+  if (n == 0) return Eigen::MatrixXd(0, 0);
+  Eigen::VectorXd inverse_norm(n);
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const double norm = j.col(c).norm();
+    inverse_norm[c] = norm > 0.0 ? 1.0 / norm : 0.0;
+  }
+  const Eigen::MatrixXd scaled = j * inverse_norm.asDiagonal();
+  const Eigen::MatrixXd normal = scaled.transpose() * scaled;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  const Eigen::VectorXd values = eigen.eigenvalues();
+  const double threshold = 1e-12 * std::max(values.maxCoeff(), 1e-300);
+  Eigen::VectorXd inverse_values(n);
+  for (Eigen::Index k = 0; k < n; ++k) inverse_values[k] = values[k] > threshold ? 1.0 / values[k] : 0.0;
+  const Eigen::MatrixXd pinv = eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  return inverse_norm.asDiagonal() * pinv * inverse_norm.asDiagonal();
+}
+
+}  // namespace
+
+FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
+                          const Effects& effects) {
+  const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(flight, effects);
+  const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+  const Eigen::Index rows = w.rows() / kComponents;
+  FlightResidual out;
+  out.residual.resize(rows, kComponents);
+  out.rotor_wrench.resize(rows, kComponents);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (int j = 0; j < kComponents; ++j) {
+      const Eigen::Index i = kComponents * r + j;
+      out.residual(r, j) = w.row(i).dot(chi_t);
+      out.rotor_wrench(r, j) = -(w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1]);
+    }
+  return out;
+}
+
+std::vector<std::string> EffectLabels(EffectKind kind) {
+  const std::string name = EffectParameterName(kind);
+  if (EffectDimension(kind) == 1) return {name};
+  return {name + "_x", name + "_y", name + "_z"};
+}
+
+EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
+                                     const std::map<std::string, double>& parameters,
+                                     const std::vector<std::string>& free_parameters, const Effects& effects,
+                                     const std::vector<EffectKind>& kinds) {
+  EffectLinearization out;
+  out.kinds = kinds;
+  for (size_t k = 0; k < kinds.size(); ++k)
+    for (const std::string& label : EffectLabels(kinds[k])) {
+      out.labels.push_back(label);
+      out.column_kind.push_back(static_cast<int>(k));
+    }
+  Eigen::Index total_rows = 0;
+  for (const ProcessedFlight& f : flights) total_rows += kComponents * f.num_rows_samples();
+  const Eigen::Index p = static_cast<Eigen::Index>(free_parameters.size());
+  const Eigen::Index e = static_cast<Eigen::Index>(out.labels.size());
+  out.residual.resize(total_rows);
+  out.parameter_jacobian.setZero(total_rows, p);
+  out.effect_jacobian.setZero(total_rows, e);
+  out.row_component.resize(total_rows);
+  std::vector<std::vector<Eigen::VectorXd>> component_series(kComponents);
+
+  Eigen::Index offset = 0;
+  for (const ProcessedFlight& flight : flights) {
+    const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+    // The IMU effects do not touch the rotor signal: compute the delayed and lagged rotor entries
+    // once and difference the IMU effects on a copy that carries them (delay and lag then 0).
+    const bool rotor_effects = effects.delay_s != 0.0 || effects.motor_tau_s != 0.0;
+    ProcessedFlight shifted_storage;
+    const ProcessedFlight* imu_flight = &flight;
+    if (rotor_effects) {
+      shifted_storage = flight;
+      shifted_storage.rotor = FilteredRotorSpeed(
+          flight.filter, DelayedLaggedRotorSquared<double>(flight, effects.delay_s, effects.motor_tau_s));
+      imu_flight = &shifted_storage;
+    }
+    Effects imu_effects = effects;
+    imu_effects.delay_s = 0.0;
+    imu_effects.motor_tau_s = 0.0;
+    const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(*imu_flight, imu_effects);
+    const Eigen::Index rows = w.rows();
+    const Eigen::VectorXd rho = w * chi_t;
+    // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
+    Eigen::Matrix<double, kComponents, 1> scale;
+    for (int j = 0; j < kComponents; ++j) {
+      double sum = 0.0, rotor = 0.0;
+      for (Eigen::Index i = j; i < rows; i += kComponents) {
+        sum += rho[i] * rho[i];
+        rotor += std::pow(w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1], 2);
+      }
+      const double rms = std::sqrt(sum / std::max<Eigen::Index>(1, rows / kComponents));
+      scale[j] = rms > 0.0 ? rms : 1.0;
+      if (j >= 2 && rotor == 0.0) {
+        scale[j] = std::numeric_limits<double>::infinity();
+      } else {
+        out.scored_rows += rows / kComponents;
+      }
+    }
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      const int j = static_cast<int>(i % kComponents);
+      out.row_component[offset + i] = j;
+      out.residual[offset + i] = rho[i] / scale[j];
+    }
+    for (Eigen::Index c = 0; c < p; ++c) {
+      const int column = ColumnOf(free_parameters[c], flight.vehicle);
+      if (column < 0) continue;
+      for (Eigen::Index i = 0; i < rows; ++i)
+        out.parameter_jacobian(offset + i, c) = w(i, column) / scale[i % kComponents];
+    }
+    Eigen::Index column = 0;
+    for (EffectKind kind : kinds) {
+      const double h = DifferenceStep(kind);
+      for (int a = 0; a < EffectDimension(kind); ++a, ++column) {
+        Eigen::VectorXd w_plus_minus[2];
+        for (int side = 0; side < 2; ++side) {
+          const bool on_rotor = ActsOnRotorSignal(kind);
+          Effects perturbed = on_rotor ? effects : imu_effects;
+          Eigen::VectorXd value = perturbed.Get(kind);
+          value[a] += side == 0 ? h : -h;
+          perturbed.Set(kind, value);
+          w_plus_minus[side] = BuildIdimMatrixWithEffects(on_rotor ? flight : *imu_flight, perturbed) * chi_t;
+        }
+        const Eigen::VectorXd derivative = (w_plus_minus[0] - w_plus_minus[1]) / (2.0 * h);
+        for (Eigen::Index i = 0; i < rows; ++i)
+          out.effect_jacobian(offset + i, column) = derivative[i] / scale[i % kComponents];
+      }
+    }
+    for (int j = 0; j < kComponents; ++j) {
+      if (std::isinf(scale[j])) continue;
+      Eigen::VectorXd series(rows / kComponents);
+      for (Eigen::Index r = 0; r < series.size(); ++r) series[r] = out.residual[offset + kComponents * r + j];
+      component_series[j].push_back(std::move(series));
+    }
+    offset += rows;
+  }
+  double factor = 0.0;
+  int scored_components = 0;
+  for (int j = 0; j < kComponents; ++j) {
+    if (component_series[j].empty()) continue;
+    factor += AutocorrelationFactor(component_series[j]);
+    ++scored_components;
+  }
+  out.autocorrelation_factor = scored_components > 0 ? factor / scored_components : 1.0;
+  return out;
+}
+
+EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const std::vector<EffectKind>& subset) {
+  std::vector<Eigen::Index> columns;
+  EffectSubsetFit fit;
+  for (size_t c = 0; c < linearization.labels.size(); ++c) {
+    const EffectKind kind = linearization.kinds[linearization.column_kind[c]];
+    if (std::find(subset.begin(), subset.end(), kind) == subset.end()) continue;
+    columns.push_back(static_cast<Eigen::Index>(c));
+    fit.labels.push_back(linearization.labels[c]);
+    fit.column_kind.push_back(kind);
+  }
+  const Eigen::MatrixXd& chi_columns = linearization.parameter_jacobian;
+  const Eigen::VectorXd& r = linearization.residual;
+  const Eigen::Index n = linearization.scored_rows, p = chi_columns.cols(),
+                     e = static_cast<Eigen::Index>(columns.size());
+  Eigen::MatrixXd effect_columns(r.size(), e);
+  for (Eigen::Index c = 0; c < e; ++c) effect_columns.col(c) = linearization.effect_jacobian.col(columns[c]);
+  Eigen::MatrixXd j(r.size(), p + e);
+  j << chi_columns, effect_columns;
+
+  const Eigen::MatrixXd covariance_unit = NormalInverse(j);
+  const Eigen::MatrixXd chi_inverse = NormalInverse(chi_columns);
+  const Eigen::VectorXd gradient = j.transpose() * r;
+  const Eigen::VectorXd chi_gradient = chi_columns.transpose() * r;
+  const double ssr = r.squaredNorm();
+  const double removed = gradient.dot(covariance_unit * gradient) - chi_gradient.dot(chi_inverse * chi_gradient);
+  fit.predicted_shrink = ssr > 0.0 ? std::max(0.0, removed) / ssr : 0.0;
+  fit.step = -(covariance_unit * gradient).tail(e);
+  const double sigma2 = ssr / std::max<double>(1.0, static_cast<double>(n - p - e));
+  const Eigen::MatrixXd effect_cov =
+      covariance_unit.bottomRightCorner(e, e) * sigma2 * linearization.autocorrelation_factor;
+  fit.std = effect_cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::VectorXd inverse_std = fit.std.unaryExpr([](double s) { return s > 0.0 ? 1.0 / s : 0.0; });
+  fit.correlation = inverse_std.asDiagonal() * effect_cov * inverse_std.asDiagonal();
+  fit.effective_samples = static_cast<double>(n) / linearization.autocorrelation_factor;
+  // Signatures with chi projected out.
+  const Eigen::MatrixXd projected = effect_columns - chi_columns * (chi_inverse * (chi_columns.transpose() * effect_columns));
+  fit.residual_correlation.resize(e);
+  const double r_norm = r.norm();
+  for (Eigen::Index c = 0; c < e; ++c) {
+    const double norm = projected.col(c).norm() * r_norm;
+    fit.residual_correlation[c] = norm > 0.0 ? projected.col(c).dot(r) / norm : 0.0;
+  }
+  return fit;
+}
+
+}  // namespace rotorid::internal

@@ -1,0 +1,72 @@
+#pragma once
+
+// The residual of the IDIM model at a point (parameters, effects) and its derivatives with respect
+// to the parameters chi and to effect parameters (internal). Used for the effect signatures of the
+// where-analysis, for the std of fitted effects and for the smallest detectable size of absent
+// ones. Rows are scaled per flight and wrench component by the residual's RMS there, so that every
+// component weighs the same (the held-out scores are scaled the same way).
+//
+// Ceres' covariance in the refinement is not used for these std: its dense SVD with a fixed
+// reciprocal condition number drops weak directions of the unequilibrated Jacobian (the rotor
+// columns are ~1e6 times the others), which makes gyro-bias and acc-bias-z std come out orders of
+// magnitude too small. Here the columns are equilibrated first.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rotorid/ident/observation.h"
+#include "rotorid/model/effects.h"
+
+namespace rotorid::internal {
+
+// Residual rho = W(effects) chi_t and rotor-model wrench -(W[:, 0:2] chi_t[0:2]) of one flight at
+// its row samples (row sample x component).
+struct FlightResidual {
+  Eigen::MatrixXd residual;
+  Eigen::MatrixXd rotor_wrench;
+};
+FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
+                          const Effects& effects);
+
+// Labels of an effect's scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.
+std::vector<std::string> EffectLabels(EffectKind kind);
+
+struct EffectLinearization {
+  std::vector<EffectKind> kinds;        // effect blocks in column order
+  std::vector<std::string> labels;      // one per effect column
+  std::vector<int> column_kind;         // index into kinds, per effect column
+  Eigen::VectorXd residual;             // scaled rho, all rows of all flights (sample-major, 6 per sample)
+  Eigen::MatrixXd parameter_jacobian;   // scaled d rho / d chi, free parameters
+  Eigen::MatrixXd effect_jacobian;      // scaled d rho / d effect parameters
+  std::vector<int> row_component;       // 0..5 per row
+  // Rows that carry weight: components the model leaves without rotor term (Mz when kd is
+  // discarded; not Fx, Fy) get none, as in the held-out score.
+  Eigen::Index scored_rows = 0;
+  double autocorrelation_factor = 1.0;  // of the scaled residual
+};
+
+// Linearises the model of `flights` at (parameters, effects): chi columns for `free_parameters`
+// (names as in NamedParameters), effect columns for `kinds` (central differences).
+EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
+                                     const std::map<std::string, double>& parameters,
+                                     const std::vector<std::string>& free_parameters, const Effects& effects,
+                                     const std::vector<EffectKind>& kinds);
+
+// Weighted least squares of the scaled residual on chi and the effect columns of `subset`.
+struct EffectSubsetFit {
+  std::vector<std::string> labels;
+  std::vector<EffectKind> column_kind;
+  Eigen::VectorXd step;                  // Gauss-Newton step of the effect parameters (chi profiled out)
+  Eigen::VectorXd std;                   // sigma * sqrt(autocorrelation factor * (J^T J)^-1)
+  Eigen::MatrixXd correlation;
+  Eigen::VectorXd residual_correlation;  // cosine of the residual with each chi-projected signature
+  double predicted_shrink = 0.0;         // fraction of the residual the step removes
+  double effective_samples = 0.0;        // rows / autocorrelation factor
+};
+
+EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const std::vector<EffectKind>& subset);
+
+}  // namespace rotorid::internal

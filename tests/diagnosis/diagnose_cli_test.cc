@@ -1,0 +1,91 @@
+// `rotorid diagnose` end to end: a simulated flight with a withheld delay, the report keys of
+// INTERFACE.md section 5, the verdict on stdout, and errors.
+
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/test_support.h"
+
+namespace rotorid {
+namespace {
+
+using testing::MakeTempDir;
+using testing::RunRotorid;
+
+nlohmann::json LoadJson(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return nlohmann::json::parse(s.str());
+}
+
+TEST(DiagnoseCliTest, WithheldDelayThroughTheCommandLine) {
+  const std::string dir = MakeTempDir("rotorid-diagnose");
+  const auto sim = RunRotorid({"simulate", "--preset", "B", "--seconds", "40", "--seed", "41", "--effect",
+                               "delay_s=0.025", "--out", dir + "/flight.csv", "--vehicle-out", dir + "/B.yaml",
+                               "--truth", dir + "/truth.json", "--quiet"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto r = RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--folds", "3",
+                             "--json", dir + "/diagnosis.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("which: delay"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("where:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("how far"), std::string::npos) << r.out;
+
+  const nlohmann::json report = LoadJson(dir + "/diagnosis.json");
+  EXPECT_EQ(report["command"], "diagnose");
+  for (const char* block : {"baseline", "final"})
+    for (const char* c : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"})
+      ASSERT_TRUE(report[block]["relative_error_pct"].contains(c)) << block << "." << c;
+  EXPECT_TRUE(report["baseline"]["relative_error_pct"]["Fx"].is_null());
+  EXPECT_TRUE(report["baseline"]["relative_error_pct"]["Mx"].is_number());
+  ASSERT_TRUE(report["where"]["component"].is_string());
+  const std::string component = report["where"]["component"];
+  EXPECT_TRUE(component == "Fz" || component == "Mx" || component == "My") << component;
+  ASSERT_TRUE(report["ranking"].is_array());
+  ASSERT_EQ(report["ranking"].size(), 5u);
+  for (const nlohmann::json& entry : report["ranking"]) {
+    for (const char* key : {"effect", "significant", "shrink_pct", "magnitude"})
+      EXPECT_TRUE(entry.contains(key)) << key;
+    EXPECT_TRUE(entry["significant"].is_boolean());
+    EXPECT_TRUE(entry["shrink_pct"].is_number());
+  }
+  const nlohmann::json& first = report["ranking"][0];
+  EXPECT_EQ(first["effect"], "delay");
+  EXPECT_TRUE(first["significant"].get<bool>());
+  ASSERT_TRUE(first["magnitude"].contains("delay_s"));
+  EXPECT_NEAR(first["magnitude"]["delay_s"]["value"].get<double>(), 0.025, 1e-3);
+  EXPECT_GT(first["magnitude"]["delay_s"]["std"].get<double>(), 0.0);
+  const nlohmann::json& acc = *std::find_if(report["ranking"].begin(), report["ranking"].end(),
+                                            [](const nlohmann::json& e) { return e["effect"] == "acc_bias"; });
+  EXPECT_EQ(acc["magnitude"]["acc_bias"]["value"].size(), 3u);
+  ASSERT_TRUE(report["selected"].is_array());
+  ASSERT_FALSE(report["selected"].empty());
+  EXPECT_EQ(report["selected"][0], "delay");
+  EXPECT_LT(report["final"]["relative_error_pct"]["Mx"].get<double>(),
+            report["baseline"]["relative_error_pct"]["Mx"].get<double>());
+  EXPECT_EQ(report["settings"]["diagnosis"]["folds"], 3);
+}
+
+TEST(DiagnoseCliTest, BadCandidateAndMissingLogFail) {
+  const std::string dir = MakeTempDir("rotorid-diagnose-bad");
+  const auto sim = RunRotorid({"simulate", "--preset", "B", "--seconds", "10", "--seed", "42", "--out",
+                               dir + "/flight.csv", "--vehicle-out", dir + "/B.yaml", "--quiet"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto bad_effect = RunRotorid(
+      {"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--effects", "delay,wobble"});
+  EXPECT_EQ(bad_effect.exit_code, 1);
+  EXPECT_NE(bad_effect.err.find("wobble"), std::string::npos) << bad_effect.err;
+  const auto bad_folds =
+      RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--folds", "1"});
+  EXPECT_EQ(bad_folds.exit_code, 1);
+  EXPECT_NE(bad_folds.err.find("folds"), std::string::npos) << bad_folds.err;
+  const auto missing = RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/none.csv"});
+  EXPECT_NE(missing.exit_code, 0);
+}
+
+}  // namespace
+}  // namespace rotorid

@@ -1,0 +1,93 @@
+// The diagnosis' statistics (F distribution, autocorrelation factor) and its linearisation of the
+// model in the effect parameters, against independent computations.
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "diagnosis/linearization.h"
+#include "diagnosis/statistics.h"
+#include "rotorid/ident/identify.h"
+#include "rotorid/refine/refine.h"
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+
+namespace rotorid::internal {
+namespace {
+
+TEST(DiagnosisStatisticsTest, FDistributionMatchesKnownValues) {
+  // F(1, d2) with a large d2 is chi-square(1): P(X > 3.8415) = 0.05.
+  EXPECT_NEAR(FSurvival(3.841459, 1.0, 1e7), 0.05, 1e-4);
+  // F(2, 2): P(F > f) = 1 / (1 + f).
+  for (double f : {0.5, 1.0, 4.0, 19.0}) EXPECT_NEAR(FSurvival(f, 2.0, 2.0), 1.0 / (1.0 + f), 1e-12) << f;
+  // Tabulated 1 % critical value of F(3, 100): 3.98.
+  EXPECT_NEAR(FCritical(0.01, 3.0, 100.0), 3.984, 2e-3);
+  EXPECT_NEAR(FSurvival(FCritical(1e-3, 3.0, 5000.0), 3.0, 5000.0), 1e-3, 1e-8);
+  EXPECT_DOUBLE_EQ(FSurvival(0.0, 3.0, 10.0), 1.0);
+  // I_x(a, b) + I_{1-x}(b, a) = 1.
+  EXPECT_NEAR(RegularizedIncompleteBeta(2.5, 7.0, 0.3) + RegularizedIncompleteBeta(7.0, 2.5, 0.7), 1.0, 1e-12);
+}
+
+TEST(DiagnosisStatisticsTest, AutocorrelationFactorOfWhiteAndAr1Noise) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  const int n = 200000;
+  Eigen::VectorXd white(n), ar(n);
+  const double rho = 0.8;
+  double state = 0.0;
+  for (int i = 0; i < n; ++i) {
+    white[i] = normal(rng);
+    state = rho * state + normal(rng);
+    ar[i] = state;
+  }
+  EXPECT_NEAR(AutocorrelationFactor({white}), 1.0, 0.05);
+  // The variance of the mean of AR(1) is inflated by (1 + rho) / (1 - rho) = 9; the Bartlett window
+  // truncated where the autocorrelation has decayed recovers most of it.
+  const double factor = AutocorrelationFactor({ar.head(n / 2), ar.tail(n / 2)});
+  EXPECT_GT(factor, 7.0);
+  EXPECT_LT(factor, 9.5);
+}
+
+// The acc bias enters the rows linearly: one Gauss-Newton step of the linearised criterion from zero
+// recovers it, within 3 of its std, and the std is of the size the scatter of fits shows.
+TEST(EffectLinearizationTest, FirstOrderStepRecoversAnAccBias) {
+  const SimulationVehicle vehicle = PresetVehicle("B");
+  SimulationOptions options;
+  options.duration_s = 30.0;
+  options.seed = 31;
+  options.effects.acc_bias = Eigen::Vector3d(0.2, -0.3, 0.15);
+  const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
+  const IdentificationResult linear = Identify({{sim.vehicle, sim.log, 1.0}}, IdentifyOptions{});
+  std::vector<std::string> free;
+  for (int k = 0; k < linear.system.num_parameters(); ++k)
+    if (linear.solution.essential[k]) free.push_back(linear.system.parameter_names[k]);
+  const EffectLinearization lin =
+      LinearizeEffects(linear.flights, NamedParameters(linear.system, linear.solution.chi), free, Effects{},
+                       {EffectKind::kAccBias, EffectKind::kGyroBias});
+  ASSERT_EQ(lin.labels.size(), 6u);
+  EXPECT_EQ(lin.labels[0], "acc_bias_x");
+  const EffectSubsetFit fit = FitEffectSubset(lin, {EffectKind::kAccBias});
+  ASSERT_EQ(fit.step.size(), 3);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(fit.step[a], options.effects.acc_bias[a], std::max(3.0 * fit.std[a], 0.01)) << a;
+    EXPECT_GT(fit.std[a], 0.0);
+  }
+  EXPECT_GT(fit.predicted_shrink, 0.1);
+  // The rows depend on the acc bias only through the specific force, -b in the force rows: the
+  // derivative is diagonal in (force component, axis) and the same in every row.
+  for (Eigen::Index i = 0; i < lin.effect_jacobian.rows(); ++i) {
+    const int j = lin.row_component[i];
+    for (int a = 0; a < 3; ++a) {
+      if (j == a) {
+        EXPECT_NE(lin.effect_jacobian(i, a), 0.0) << i;
+        EXPECT_NEAR(lin.effect_jacobian(i, a), lin.effect_jacobian(j, a), 1e-9 * std::abs(lin.effect_jacobian(j, a)));
+      } else if (j < 3) {
+        EXPECT_NEAR(lin.effect_jacobian(i, a), 0.0, 1e-9) << i;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rotorid::internal

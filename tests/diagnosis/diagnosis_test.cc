@@ -1,0 +1,139 @@
+// The diagnosis on simulated flights whose effect is withheld: it must name the effect first, mark
+// it significant and recover its size; on a clean flight it must flag nothing.
+
+#include "rotorid/diagnosis/diagnosis.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "rotorid/core/error.h"
+#include "rotorid/diagnosis/diagnosis_json.h"
+#include "rotorid/model/rotation.h"
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+
+namespace rotorid {
+namespace {
+
+// Configuration B (asymmetric: kd and I_zz identifiable), pixhawk-level noise by default.
+ProcessedFlight SimulatedFlight(double seconds, std::uint64_t seed, const Effects& effects) {
+  const SimulationVehicle vehicle = PresetVehicle("B");
+  SimulationOptions options;
+  options.duration_s = seconds;
+  options.seed = seed;
+  options.effects = effects;
+  const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
+  return ProcessFlights({{sim.vehicle, sim.log, 1.0}}, ObservationOptions{}).front();
+}
+
+// Few folds keep the test fast in sanitizer builds; the benchmark runs the defaults.
+DiagnosisOptions TestOptions() {
+  DiagnosisOptions options;
+  options.folds = 3;
+  return options;
+}
+
+const EffectVerdict& VerdictOf(const Diagnosis& d, EffectKind kind) {
+  for (const EffectVerdict& v : d.ranking)
+    if (v.kind == kind) return v;
+  throw Error("no verdict");
+}
+
+TEST(DiagnosisTest, WithheldDelayIsRankedFirstAndItsSizeRecovered) {
+  Effects withheld;
+  withheld.delay_s = 0.018;
+  const Diagnosis d = Diagnose({SimulatedFlight(45.0, 21, withheld)}, {}, TestOptions());
+  ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
+  EXPECT_EQ(d.selected.front(), EffectKind::kDelay) << DiagnosisVerdict(d);
+  const EffectVerdict& first = d.ranking.front();
+  EXPECT_EQ(first.kind, EffectKind::kDelay);
+  EXPECT_TRUE(first.significant);
+  EXPECT_EQ(first.status, "selected");
+  EXPECT_NEAR(first.value[0], withheld.delay_s, 1e-3);  // the refinement issue's tolerance
+  EXPECT_GT(first.std[0], 0.0);
+  EXPECT_GT(first.test.shrink_pct, 10.0);
+  // The held-out gap of the rotor-driven components shrinks.
+  for (int j : {2, 3, 4}) EXPECT_LT(*d.final_gap.relative_error_pct[j], *d.baseline.relative_error_pct[j]) << j;
+  EXPECT_EQ(d.selected.size(), 1u) << DiagnosisVerdict(d);
+}
+
+TEST(DiagnosisTest, WithheldAccBiasIsRankedFirstWithinThreeStd) {
+  Effects withheld;
+  withheld.acc_bias = Eigen::Vector3d(0.3, -0.2, 0.25);
+  const Diagnosis d = Diagnose({SimulatedFlight(45.0, 22, withheld)}, {}, TestOptions());
+  ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
+  EXPECT_EQ(d.selected.front(), EffectKind::kAccBias) << DiagnosisVerdict(d);
+  const EffectVerdict& first = d.ranking.front();
+  EXPECT_TRUE(first.significant);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_LE(std::abs(first.value[a] - withheld.acc_bias[a]), 3.0 * first.std[a] + 1e-9)
+        << "axis " << a << ": " << first.value[a] << " +- " << first.std[a];
+    EXPECT_LT(first.std[a], 0.05);
+  }
+  EXPECT_EQ(d.selected.size(), 1u) << DiagnosisVerdict(d);
+}
+
+TEST(DiagnosisTest, CleanFlightFlagsNothing) {
+  const Diagnosis d = Diagnose({SimulatedFlight(45.0, 23, Effects{})}, {}, TestOptions());
+  EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);
+  ASSERT_EQ(d.ranking.size(), static_cast<size_t>(kNumEffectKinds));
+  for (const EffectVerdict& v : d.ranking) {
+    EXPECT_FALSE(v.significant) << EffectName(v.kind);
+    EXPECT_EQ(v.status, "not significant") << EffectName(v.kind);
+    // Absent effects come with the smallest size this flight would reveal.
+    ASSERT_EQ(v.detectable_above.size(), EffectDimension(v.kind));
+    EXPECT_GT(v.detectable_above.minCoeff(), 0.0) << EffectName(v.kind);
+  }
+  // A gyro bias of realistic size (<= 0.03 rad/s) is below what these equations reveal on 45 s.
+  EXPECT_GT(VerdictOf(d, EffectKind::kGyroBias).detectable_above.maxCoeff(), 0.03);
+  // Delay would show from well below a millisecond.
+  EXPECT_LT(VerdictOf(d, EffectKind::kDelay).detectable_above[0], 1e-3);
+  // Held-out equals final; every contract key is there.
+  const nlohmann::json j = DiagnosisJson(d);
+  for (const char* c : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) {
+    EXPECT_TRUE(j["baseline"]["relative_error_pct"].contains(c)) << c;
+    EXPECT_TRUE(j["final"]["relative_error_pct"].contains(c)) << c;
+  }
+  EXPECT_TRUE(j["baseline"]["relative_error_pct"]["Fx"].is_null());
+  EXPECT_TRUE(j["where"]["component"].is_string());
+  EXPECT_TRUE(j["selected"].is_array() && j["selected"].empty());
+  EXPECT_EQ(j["ranking"].size(), static_cast<size_t>(kNumEffectKinds));
+}
+
+TEST(DiagnosisTest, HeldOutFlightsReplaceFoldsAndFindMisalignment) {
+  Effects withheld;
+  withheld.misalignment_rad = Eigen::Vector3d(0.6, -1.5, 0.5) * M_PI / 180.0;
+  const Diagnosis d =
+      Diagnose({SimulatedFlight(40.0, 24, withheld)}, {SimulatedFlight(40.0, 25, withheld)}, TestOptions());
+  EXPECT_NE(d.validation.find("held-out flight"), std::string::npos) << d.validation;
+  ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
+  EXPECT_EQ(d.selected.front(), EffectKind::kMisalignment) << DiagnosisVerdict(d);
+  const EffectVerdict& first = d.ranking.front();
+  const Eigen::Matrix3d difference =
+      ExpSO3<double>(first.value).transpose() * ExpSO3<double>(withheld.misalignment_rad);
+  const double angle_deg = std::acos(std::clamp(0.5 * (difference.trace() - 1.0), -1.0, 1.0)) * 180.0 / M_PI;
+  EXPECT_LT(angle_deg, 0.2);
+}
+
+TEST(DiagnosisTest, RejectsInvalidOptionsAndForeignHeldOutFlights) {
+  DiagnosisOptions options;
+  options.folds = 1;
+  EXPECT_FALSE(options.Validate().empty());
+  options = DiagnosisOptions{};
+  options.candidates = {EffectKind::kDelay, EffectKind::kDelay};
+  EXPECT_FALSE(options.Validate().empty());
+  options = DiagnosisOptions{};
+  options.alpha = 0.0;
+  EXPECT_THROW(Diagnose({}, {}, options), Error);
+  EXPECT_THROW(Diagnose({}, {}, DiagnosisOptions{}), Error);
+  ProcessedFlight flight = SimulatedFlight(20.0, 26, Effects{});
+  ProcessedFlight foreign = flight;
+  foreign.vehicle.name = "C";
+  DiagnosisOptions fast;
+  fast.candidates = {EffectKind::kAccBias};
+  EXPECT_THROW(Diagnose({flight}, {foreign}, fast), Error);
+}
+
+}  // namespace
+}  // namespace rotorid
