@@ -6,7 +6,7 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends \
-  build-essential cmake pkg-config python3 \
+  build-essential cmake ninja-build pkg-config python3 \
   libeigen3-dev libceres-dev libgoogle-glog-dev libgflags-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libfast-float-dev \

@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${ROTORID_SKIP_DEPS:-0}" != "1" ]; then bash scripts/install_deps.sh; fi
 JOBS=${JOBS:-$(nproc)}
-cmake -S . -B build/release -DCMAKE_BUILD_TYPE=Release -DROTORID_BUILD_TESTS=OFF > /dev/null
+cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DROTORID_BUILD_TESTS=OFF > /dev/null
 cmake --build build/release -j"$JOBS" --target rotorid_cli
 R=build/release/apps/rotorid
 mkdir -p out
