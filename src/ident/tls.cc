@@ -307,10 +307,14 @@ int AutocorrelationLag(const Eigen::VectorXd& r, const IdimSystem& system) {
   return std::max(2, 2 * lag_max);
 }
 
+// Bound on how far the fixed point may lower a group's residual variance below the full model's
+// unweighted start.
+constexpr double kMaxVarianceDrop = 0.1;
+
 // rotorid's default: errors-in-variables TLS with the noise metric, iterated to a fixed point of the
 // row weights and equation-error variances; sandwich covariance robust to autocorrelation.
 CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors, const std::vector<int>& columns,
-                          const TlsOptions& options) {
+                          const TlsOptions& options, std::vector<double>* start_var) {
   const int rows = static_cast<int>(system.w.rows()), n = static_cast<int>(columns.size());
   const int groups = system.num_groups();
   const std::vector<int>& counts = factors.counts;
@@ -337,7 +341,14 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
       const double noise_var = out.chi_t.dot(group_cov[g] * out.chi_t) / counts[g];
       const double residual_var = sum_sq[g] / counts[g];
       const double floor = 1e-24 * (rotor_sq / counts[g]) + 1e-300;
-      const double total_var = std::max({residual_var, noise_var, floor});
+      if ((*start_var)[g] < 0.0) (*start_var)[g] = std::max(residual_var, noise_var);
+      // A group can shrink its residual to nothing by driving the parameters it alone determines to
+      // zero (yaw on a weakly excited flight: kd, I_zz), or once they are discarded, by equating the
+      // inertias of its last cross terms; its weight would then grow without bound (the degenerate
+      // likelihood of per-group variances). A real fit does not lower a group's variance tenfold
+      // from the unweighted start of the full model, so that bounds it.
+      const double total_var =
+          std::max({residual_var, noise_var, floor, kMaxVarianceDrop * (*start_var)[g]});
       const double equation_var = total_var - noise_var;
       const double user = system.flight_weight[IdimSystem::Flight(g)];
       group_weight[g] = user * user / total_var;
@@ -438,12 +449,14 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
                                             std::to_string(p) + " parameters");
 
   const GroupFactors factors = FactorGroups(system);
+  // Per group, set by the first (full-model) noise-aware solve; -1 until then.
+  std::vector<double> start_var(system.num_groups(), -1.0);
   CoreSolve core;
   while (true) {
     std::vector<int> columns = free;
     columns.push_back(p);
     core = options.method == TlsMethod::kPaper ? SolvePaper(system, factors, columns, options)
-                                               : SolveNoiseAware(system, factors, columns, options);
+                                               : SolveNoiseAware(system, factors, columns, options, &start_var);
     const int nf = static_cast<int>(free.size());
     Eigen::VectorXd rel(nf);
     for (int k = 0; k < nf; ++k)
