@@ -11,14 +11,13 @@
 #include <unordered_map>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/model/rotation.h"
 
 namespace rotorid {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // ---- The map file ----
 

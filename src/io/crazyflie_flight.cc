@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/signal/resample.h"
@@ -14,8 +15,6 @@
 namespace rotorid {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRpmToRadps = 2.0 * kPi / 60.0;
 constexpr double kPwmFullScale = 65535.0;  // the firmware's 16-bit motor command range
 constexpr int kCrazyflieRotors = 4;
 
@@ -218,7 +217,6 @@ FlightLog CrazyflieUsdToFlight(const CrazyflieUsdLog& usd, int num_rotors, const
       }
     }
   }
-  constexpr double kDegToRad = kPi / 180.0;
   log.gyro_radps.resize(n, 3);
   log.acc_mps2.resize(n, 3);
   for (int a = 0; a < 3; ++a) {

@@ -6,12 +6,12 @@
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 
 namespace rotorid {
 namespace {
 
 constexpr int kKept = -1;
-constexpr double kPi = 3.14159265358979323846;
 
 // Higher wins where reasons overlap: the most specific explanation of a sample is reported.
 int Priority(ExclusionReason reason) {

@@ -6,13 +6,13 @@
 #include <sstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 
 namespace rotorid {
 namespace {
 
 using Complex = std::complex<double>;
 
-constexpr double kPi = 3.14159265358979323846;
 // Beyond this the overall gain (kept in the first section, as scipy does) underflows for low cut-offs,
 // and no identification task needs it.
 constexpr int kMaxOrder = 32;

@@ -6,11 +6,11 @@
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 
 namespace rotorid {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Guards against a unit mix-up (ms for s, kHz for Hz) silently allocating gigabytes.
 constexpr double kMaxTimeBaseSamples = 1e9;
 

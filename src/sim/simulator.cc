@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/sim/dynamics.h"
 #include "rotorid/sim/random.h"
@@ -17,8 +18,6 @@
 namespace rotorid {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRadToDeg = 180.0 / kPi;
 constexpr double kHoverAltitudeM = 1.5;
 
 // Independent random streams drawn from the one seed.

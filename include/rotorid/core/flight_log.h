@@ -6,9 +6,9 @@
 
 #include <Eigen/Core>
 
-namespace rotorid {
+#include "rotorid/core/units.h"
 
-constexpr double kStandardGravity = 9.80665;
+namespace rotorid {
 
 // Motion capture track, on the same time base as the flight log.
 struct MocapTrack {
