@@ -15,7 +15,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -24,6 +23,7 @@
 #include "rotorid/model/parameters.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/sim/presets.h"
+#include "rotorid/sim/realistic_effects.h"
 #include "rotorid/sim/simulator.h"
 
 using namespace rotorid;
@@ -35,31 +35,6 @@ struct Case {
   std::vector<EffectKind> kinds;
 };
 
-// Realistic random magnitudes (issue 4): delay 5-40 ms, tau 20-60 ms, acc bias 0.1-0.5 m/s^2 per
-// axis, gyro bias 0.005-0.03 rad/s per axis, misalignment 1-4 deg about a random axis.
-Effects Draw(const std::vector<EffectKind>& kinds, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  auto sign = [&]() { return u(rng) < 0.5 ? -1.0 : 1.0; };
-  Effects e;
-  for (EffectKind k : kinds) {
-    switch (k) {
-      case EffectKind::kDelay: e.delay_s = 0.005 + 0.035 * u(rng); break;
-      case EffectKind::kMotorLag: e.motor_tau_s = 0.02 + 0.04 * u(rng); break;
-      case EffectKind::kAccBias:
-        for (int a = 0; a < 3; ++a) e.acc_bias[a] = sign() * (0.1 + 0.4 * u(rng));
-        break;
-      case EffectKind::kGyroBias:
-        for (int a = 0; a < 3; ++a) e.gyro_bias[a] = sign() * (0.005 + 0.025 * u(rng));
-        break;
-      case EffectKind::kMisalignment: {
-        Eigen::Vector3d axis(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
-        e.misalignment_rad = axis.normalized() * (1.0 + 3.0 * u(rng)) * M_PI / 180.0;
-        break;
-      }
-    }
-  }
-  return e;
-}
 
 // Error of an estimate in the unit of its tolerance and whether it is within it: delay +-1 ms,
 // tau +-10 %, biases within 3 std, misalignment +-0.2 deg.
@@ -130,11 +105,11 @@ int main(int argc, char** argv) {
 
   auto run = [&](const Case& c, std::uint64_t seed, double seconds, int threads, Effects* truth,
                  double* diagnose_seconds, double* diagnose_cpu_seconds) {
-    std::mt19937_64 rng(seed * 7919 + c.label.size());
+    RandomStream random = EffectDrawStream(seed, c.kinds);
     SimulationOptions sim;
     sim.duration_s = seconds;
     sim.seed = seed;
-    sim.effects = Draw(c.kinds, rng);
+    sim.effects = DrawRealisticEffects(c.kinds, &random);
     *truth = sim.effects;
     const SimulationResult flight = Simulate(vehicle.vehicle, vehicle.parameters, sim);
     DiagnosisOptions options;

@@ -2,18 +2,25 @@
 // effects at realistic magnitudes; the refinement must recover them and un-bias the parameters.
 //
 //   refine_study [seeds=5] [seconds=90] [config=B]
+//   refine_study --delay [flights=50] [seconds=90] [config=B]
+//
+// --delay: `rotorid delay`'s estimator on random flights whose command-to-IMU delay is drawn
+// uniformly over its whole search range, -100..+200 ms: the simulator's sub-sample delay (0-40 ms)
+// plus a whole-sample shift of the logged rotor columns against the IMU.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "rotorid/ident/identify.h"
+#include "rotorid/refine/delay.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/refine/refine.h"
 #include "rotorid/sim/presets.h"
+#include "rotorid/sim/realistic_effects.h"
 #include "rotorid/sim/simulator.h"
 
 using namespace rotorid;
@@ -25,37 +32,64 @@ struct Case {
   std::vector<EffectKind> kinds;
 };
 
-// Realistic random magnitudes (issue 4): delay 5-40 ms, tau 20-60 ms, acc bias 0.1-0.5 m/s^2 per
-// axis, gyro bias 0.005-0.03 rad/s, misalignment 1-4 deg.
-Effects Draw(const std::vector<EffectKind>& kinds, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  auto sign = [&]() { return u(rng) < 0.5 ? -1.0 : 1.0; };
-  Effects e;
-  for (EffectKind k : kinds) {
-    switch (k) {
-      case EffectKind::kDelay: e.delay_s = 0.005 + 0.035 * u(rng); break;
-      case EffectKind::kMotorLag: e.motor_tau_s = 0.02 + 0.04 * u(rng); break;
-      case EffectKind::kAccBias:
-        for (int a = 0; a < 3; ++a) e.acc_bias[a] = sign() * (0.1 + 0.4 * u(rng));
-        break;
-      case EffectKind::kGyroBias:
-        for (int a = 0; a < 3; ++a) e.gyro_bias[a] = sign() * (0.005 + 0.025 * u(rng));
-        break;
-      case EffectKind::kMisalignment: {
-        Eigen::Vector3d axis(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
-        e.misalignment_rad = axis.normalized() * (1.0 + 3.0 * u(rng)) * M_PI / 180.0;
-        break;
-      }
-    }
-  }
-  return e;
-}
 
 double RelErr(double estimate, double truth) { return 100.0 * std::abs(estimate - truth) / std::abs(truth); }
+
+// Shifts the logged rotor columns by `samples` against the IMU: positive makes the log's rotor
+// signal lead (a larger command-to-IMU delay). Both ends lose |samples| rows.
+FlightLog ShiftRotorColumns(const FlightLog& log, int samples) {
+  const int n = log.num_samples(), k = std::abs(samples);
+  FlightLog shifted = log.Slice(samples > 0 ? 0 : k, samples > 0 ? n - k : n);
+  shifted.rotor_radps = log.rotor_radps.middleRows(samples > 0 ? k : 0, n - k);
+  return shifted;
+}
+
+int DelayStudy(int flights, double seconds, const std::string& config) {
+  const SimulationVehicle v = PresetVehicle(config);
+  DelayOptions options;
+  std::printf("%6s %10s %10s %10s %10s %9s\n", "flight", "truth ms", "grid ms", "estimate", "std ms", "error ms");
+  int within = 0, failed = 0;
+  double worst = 0.0;
+  for (int flight = 1; flight <= flights; ++flight) {
+    RandomStream random = EffectDrawStream(flight, {EffectKind::kDelay});
+    const double total_s = random.Uniform(options.min_s + 0.005, options.max_s - 0.005);
+    SimulationOptions sim;
+    sim.duration_s = seconds;
+    sim.seed = 900 + flight;
+    sim.effects.delay_s = random.Uniform(0.0, 0.04);
+    const SimulationResult simulated = Simulate(v.vehicle, v.parameters, sim);
+    const double dt = simulated.log.MedianDt();
+    const int shift = static_cast<int>(std::lround((total_s - sim.effects.delay_s) / dt));
+    const double truth_s = sim.effects.delay_s + shift * dt;
+    try {
+      IdentifyOptions identify;
+      identify.allow_partial = true;
+      const IdentificationResult linear =
+          Identify({{simulated.vehicle, ShiftRotorColumns(simulated.log, shift), 1.0}}, identify);
+      const DelayEstimate estimate = EstimateDelay(linear, options);
+      const double error_ms = 1e3 * (estimate.delay_s - truth_s);
+      worst = std::max(worst, std::abs(error_ms));
+      within += std::abs(error_ms) <= 2.0;
+      std::printf("%6d %10.2f %10.1f %10.2f %10.3f %9.3f\n", flight, 1e3 * truth_s, 1e3 * estimate.grid_best_s,
+                  1e3 * estimate.delay_s, 1e3 * estimate.delay_std_s, error_ms);
+    } catch (const std::exception& e) {
+      ++failed;
+      std::printf("%6d %10.2f failed: %s\n", flight, 1e3 * truth_s, e.what());
+    }
+    std::fflush(stdout);
+  }
+  std::printf("\n%d flights, delays drawn in [%.0f, %.0f] ms: %d within 2 ms, %d failed, largest error %.3f ms\n",
+              flights, 1e3 * options.min_s, 1e3 * options.max_s, within, failed, worst);
+  return within == flights ? 0 : 1;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--delay") {
+    return DelayStudy(argc > 2 ? std::atoi(argv[2]) : 50, argc > 3 ? std::atof(argv[3]) : 90.0,
+                      argc > 4 ? argv[4] : "B");
+  }
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 5;
   const double seconds = argc > 2 ? std::atof(argv[2]) : 90.0;
   const std::string config = argc > 3 ? argv[3] : "B";
@@ -74,11 +108,11 @@ int main(int argc, char** argv) {
               "effect estimate (+-std)", "kt lin%", "Ixx lin", "Izz lin", "kt ref%", "Ixx ref", "Izz ref");
   for (const Case& c : cases) {
     for (int seed = 1; seed <= seeds; ++seed) {
-      std::mt19937_64 rng(seed * 7919 + c.label.size());
+      RandomStream random = EffectDrawStream(seed, c.kinds);
       SimulationOptions options;
       options.duration_s = seconds;
       options.seed = 500 + seed;
-      options.effects = Draw(c.kinds, rng);
+      options.effects = DrawRealisticEffects(c.kinds, &random);
       const SimulationResult sim = Simulate(v.vehicle, v.parameters, options);
       IdentifyOptions identify;
       identify.allow_partial = true;
