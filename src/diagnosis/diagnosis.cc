@@ -369,6 +369,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   std::map<EffectKind, Tested> tested;
   std::vector<std::vector<EffectKind>> step_fitted;  // per step: the candidates refined in the folds
   std::vector<std::map<EffectKind, EffectTest>> step_tests;
+  std::vector<SelectionStep> forward_steps;  // as selected, before the backward elimination
   EffectMask selected = 0;
   for (int step = 1;; ++step) {
     if (static_cast<int>(KindsOf(selected).size()) >= options.max_effects) break;
@@ -479,8 +480,84 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     selected |= Bit(best_kind);
     s.after = records.at(selected).gap;
     s.test = best_test;
-    diagnosis.steps.push_back(s);
+    forward_steps.push_back(s);
     diagnosis.selected.push_back(best_kind);
+  }
+
+  // Fits (in the folds) the models that are not refined yet, warm-started from `from` without the
+  // effects they lack.
+  auto ensure_fitted = [&](const std::vector<EffectMask>& masks, EffectMask from) {
+    std::vector<EffectMask> missing;
+    std::vector<std::vector<Effects>> initial;
+    for (EffectMask mask : masks) {
+      if (records.count(mask) || std::find(missing.begin(), missing.end(), mask) != missing.end()) continue;
+      missing.push_back(mask);
+      std::vector<Effects> starts;
+      for (const Effects& e : records.at(from).fold_effects) {
+        Effects start;
+        for (EffectKind k : KindsOf(mask)) start.Set(k, e.Get(k));
+        starts.push_back(start);
+      }
+      initial.push_back(std::move(starts));
+    }
+    if (missing.empty()) return;
+    for (ModelRecord& record : evaluator.Fit(missing, initial)) {
+      if (!record.ok) {
+        diagnosis.warnings.push_back("model " + Join(KindsOf(record.mask)) + ": refinement failed (" + record.error +
+                                     ")");
+        continue;
+      }
+      records[record.mask] = std::move(record);
+    }
+  };
+
+  // Backward elimination: an effect selected early can become redundant once later ones are in (an
+  // acc bias standing in for a misalignment while a large lag dominated the residual). Each kept
+  // effect, earliest first, is tested on top of all the others; the first that is not significant
+  // is dropped and the pass restarts.
+  struct Dropped {
+    EffectKind kind;
+    EffectMask others;
+    EffectTest test;
+  };
+  std::vector<Dropped> dropped;
+  for (bool changed = true; changed && diagnosis.selected.size() >= 2;) {
+    changed = false;
+    for (size_t i = 0; i < diagnosis.selected.size(); ++i) {
+      const EffectKind kind = diagnosis.selected[i];
+      const EffectMask others = selected & ~Bit(kind);
+      ensure_fitted({others}, selected);
+      if (!records.count(others)) continue;
+      const EffectTest test = internal::TestAddedEffects(records.at(others).gap, records.at(selected).gap,
+                                                         EffectDimension(kind), options.alpha, options.min_shrink_pct);
+      if (test.significant) continue;
+      dropped.push_back({kind, others, test});
+      selected = others;
+      diagnosis.selected.erase(diagnosis.selected.begin() + static_cast<std::ptrdiff_t>(i));
+      changed = true;
+      break;
+    }
+  }
+  if (!dropped.empty()) mark("backward elimination");
+
+  // How far: the held-out gap after each kept effect, in the order they were added.
+  {
+    EffectMask prefix = 0;
+    std::vector<EffectMask> prefixes;
+    for (EffectKind kind : diagnosis.selected) prefixes.push_back(prefix |= Bit(kind));
+    ensure_fitted(prefixes, selected);
+    prefix = 0;
+    for (EffectKind kind : diagnosis.selected) {
+      SelectionStep s;
+      s.added = kind;
+      s.before = records.at(prefix).gap;
+      prefix |= Bit(kind);
+      if (!records.count(prefix)) break;
+      s.after = records.at(prefix).gap;
+      s.test = internal::TestAddedEffects(s.before, s.after, EffectDimension(kind), options.alpha,
+                                          options.min_shrink_pct);
+      diagnosis.steps.push_back(s);
+    }
   }
   diagnosis.final_gap = records.at(selected).gap;
 
@@ -542,6 +619,29 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
         v.value = Eigen::VectorXd::Zero(EffectDimension(kind));
       v.status = "not significant";
     }
+    // Kept effects: their test on top of the kept effects added before them.
+    EffectMask prefix = 0;
+    for (size_t i = 0; i < diagnosis.steps.size(); ++i) {
+      if (diagnosis.steps[i].added == kind) {
+        v.step = static_cast<int>(i) + 1;
+        v.tested_on_top_of = KindsOf(prefix);
+        v.test = diagnosis.steps[i].test;
+        v.significant = v.test.significant;
+        v.relative_error_pct = diagnosis.steps[i].after.relative_error_pct;
+      }
+      prefix |= Bit(diagnosis.steps[i].added);
+    }
+    // Dropped effects: their test on top of all the others at the moment they were dropped.
+    for (const Dropped& d : dropped) {
+      if (d.kind != kind) continue;
+      const ModelRecord& with = records.at(d.others | Bit(kind));
+      v.dropped_as_redundant = true;
+      v.tested_on_top_of = KindsOf(d.others);
+      v.test = d.test;
+      v.significant = false;
+      v.relative_error_pct = with.gap.relative_error_pct;
+      v.value = MeanFoldEffect(with, kind);
+    }
     verdicts.push_back(std::move(v));
   }
   auto verdict_of = [&](EffectKind kind) -> EffectVerdict& {
@@ -552,8 +652,12 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   // (significant, at least half as much) is compared with it directly on the held-out rows. If the
   // selected effect does not fit significantly better, the data cannot tell them apart.
   EffectMask before = 0;
-  for (size_t s = 0; s < diagnosis.steps.size(); ++s) {
-    const SelectionStep& step = diagnosis.steps[s];
+  for (size_t s = 0; s < forward_steps.size(); ++s) {
+    const SelectionStep& step = forward_steps[s];
+    if (!Has(selected, step.added)) {
+      before |= Bit(step.added);
+      continue;
+    }
     for (EffectKind other : step_fitted[s]) {
       if (other == step.added || Has(selected, other)) continue;
       const EffectTest& other_test = step_tests[s].at(other);
@@ -608,6 +712,9 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     std::ostringstream note;
     if (v.status == "selected") {
       note << "held-out gap shrinks " << std::fixed << std::setprecision(1) << v.test.shrink_pct << " %";
+    } else if (v.dropped_as_redundant) {
+      note << "selected early, but not significant once " << Join(v.tested_on_top_of) << " were in (held-out shrink "
+           << std::setprecision(2) << std::fixed << v.test.shrink_pct << " %): dropped as redundant";
     } else if (v.test.screened) {
       note << "not refined: its first-order in-sample shrink is only " << std::setprecision(2) << std::fixed
            << v.test.shrink_pct << " %; this data would reveal it above "

@@ -132,6 +132,7 @@ json DiagnosisJson(const Diagnosis& d) {
                   {"screening", TestJson(v.screening)},
                   {"relative_error_pct", Components(v.relative_error_pct)},
                   {"confounded_with", Kinds(v.confounded_with)},
+                  {"dropped_as_redundant", v.dropped_as_redundant},
                   {"note", v.note}};
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
     ranking.push_back(entry);

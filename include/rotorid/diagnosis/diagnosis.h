@@ -14,7 +14,8 @@
 // selected so far, the one that removes the most held-out residual is kept when an F-test on the
 // whitened held-out residuals (effective sample size corrected for autocorrelation, charged for
 // the parameters the effect adds) is significant and its held-out shrink exceeds a floor learned
-// from clean simulated flights.
+// from clean simulated flights. A backward pass then drops a kept effect that is no longer
+// significant on top of the others.
 
 #include <functional>
 #include <optional>
@@ -126,6 +127,9 @@ struct EffectVerdict {
   Eigen::VectorXd detectable_above;
   std::vector<std::optional<double>> relative_error_pct;  // held-out, with it added
   std::vector<EffectKind> confounded_with;
+  // Selected by the forward selection, then dropped by the backward pass: not significant on top of
+  // the effects selected after it (`test` is that test).
+  bool dropped_as_redundant = false;
   std::string note;  // one line for people
 };
 
@@ -146,7 +150,8 @@ struct ConfoundedEffects {
   std::string note;
 };
 
-// One forward-selection step that kept an effect: the held-out gap before and after.
+// One kept effect, in the order they were added: the held-out gap before and after (on top of the
+// kept effects added before it).
 struct SelectionStep {
   EffectKind added = EffectKind::kDelay;
   HeldOutGap before;
