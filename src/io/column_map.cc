@@ -10,6 +10,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/units.h"
 #include "rotorid/io/atomic_file.h"
@@ -58,26 +59,14 @@ MapLocation LocationOf(const YAML::Node& node) {
   throw Error(Located(source, where.line, where.column, message));
 }
 
-[[noreturn]] void Fail(const std::string& source, const YAML::Node& node, const std::string& message) {
-  FailAt(source, LocationOf(node), message);
-}
-
 std::string UnitList(const std::vector<UnitEntry>& units) {
   std::string out;
   for (const UnitEntry& u : units) out += (out.empty() ? "" : ", ") + std::string(u.name);
   return out;
 }
 
-double ReadNumber(const std::string& source, const YAML::Node& node, const std::string& what) {
-  double value = 0.0;
-  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value)) {
-    Fail(source, node, what + " must be a finite number" + (node.IsScalar() ? ", got '" + node.Scalar() + "'" : ""));
-  }
-  return value;
-}
-
 std::string ReadString(const std::string& source, const YAML::Node& node, const std::string& what) {
-  if (!node.IsScalar()) Fail(source, node, what + " must be a string");
+  if (!node.IsScalar()) internal::FailAt(source, node, what + " must be a string");
   return node.Scalar();
 }
 
@@ -92,7 +81,7 @@ struct QuantitySpec {
 MappedQuantity ParseQuantity(const std::string& source, const YAML::Node& key, const YAML::Node& node,
                              const QuantitySpec& spec, double gravity_mps2) {
   const std::string name = spec.key;
-  if (!node.IsMap()) Fail(source, node, name + " must be a mapping like " + spec.example);
+  if (!node.IsMap()) internal::FailAt(source, node, name + " must be a mapping like " + spec.example);
   MappedQuantity q;
   q.location = LocationOf(key);
   // std::optional, not YAML::Node's own "defined" state: assigning to a Node writes through to
@@ -111,23 +100,23 @@ MappedQuantity ParseQuantity(const std::string& source, const YAML::Node& key, c
     } else if (k == "range") {
       range.emplace(it->second);
     } else {
-      Fail(source, it->first,
-           "unknown key '" + k + "' in " + name + " (known: *column, *columns, *unit, *scale, *range)");
+      internal::FailAt(source, it->first,
+                       "unknown key '" + k + "' in " + name + " (known: *column, *columns, *unit, *scale, *range)");
     }
   }
-  if (column && columns) Fail(source, node, name + " gives both 'column' and 'columns'; give one");
+  if (column && columns) internal::FailAt(source, node, name + " gives both 'column' and 'columns'; give one");
   if (column) {
     if (spec.num_columns != 1) {
-      Fail(source, *column,
-           name + " needs 'columns' with " +
-               (spec.num_columns < 0 ? std::string("one per rotor") : std::to_string(spec.num_columns)) +
-               " entries, e.g. " + spec.example);
+      internal::FailAt(source, *column,
+                       name + " needs 'columns' with " +
+                           (spec.num_columns < 0 ? std::string("one per rotor") : std::to_string(spec.num_columns)) +
+                           " entries, e.g. " + spec.example);
     }
     q.columns.push_back(ReadString(source, *column, name + " column"));
     q.column_locations.push_back(LocationOf(*column));
   } else if (columns) {
     if (!columns->IsSequence())
-      Fail(source, *columns, name + " columns must be a list, e.g. " + std::string(spec.example));
+      internal::FailAt(source, *columns, name + " columns must be a list, e.g. " + std::string(spec.example));
     for (size_t i = 0; i < columns->size(); ++i) {
       q.columns.push_back(ReadString(source, (*columns)[i], name + " column " + std::to_string(i + 1)));
       q.column_locations.push_back(LocationOf((*columns)[i]));
@@ -135,26 +124,28 @@ MappedQuantity ParseQuantity(const std::string& source, const YAML::Node& key, c
     const bool count_ok =
         spec.num_columns < 0 ? !q.columns.empty() : static_cast<int>(q.columns.size()) == spec.num_columns;
     if (!count_ok) {
-      Fail(source, *columns,
-           name + " lists " + std::to_string(q.columns.size()) + " columns, expected " +
-               (spec.num_columns < 0 ? std::string("at least 1") : std::to_string(spec.num_columns)));
+      internal::FailAt(source, *columns,
+                       name + " lists " + std::to_string(q.columns.size()) + " columns, expected " +
+                           (spec.num_columns < 0 ? std::string("at least 1") : std::to_string(spec.num_columns)));
     }
   } else {
-    Fail(source, node, name + " needs '" + (spec.num_columns == 1 ? "column" : "columns") + "', e.g. " + spec.example);
+    internal::FailAt(source, node,
+                     name + " needs '" + (spec.num_columns == 1 ? "column" : "columns") + "', e.g. " + spec.example);
   }
   for (size_t i = 0; i < q.columns.size(); ++i) {
     if (q.columns[i].empty()) FailAt(source, q.column_locations[i], name + " has an empty column name");
   }
 
   if (spec.units == nullptr) {
-    if (unit) Fail(source, *unit, name + " takes no unit");
+    if (unit) internal::FailAt(source, *unit, name + " takes no unit");
   } else {
-    if (!unit) Fail(source, node, name + " needs a unit (" + UnitList(*spec.units) + ")");
+    if (!unit) internal::FailAt(source, node, name + " needs a unit (" + UnitList(*spec.units) + ")");
     q.unit = ReadString(source, *unit, name + " unit");
     const auto entry =
         std::find_if(spec.units->begin(), spec.units->end(), [&](const UnitEntry& u) { return q.unit == u.name; });
     if (entry == spec.units->end()) {
-      Fail(source, *unit, "unknown unit '" + q.unit + "' for " + name + " (known: " + UnitList(*spec.units) + ")");
+      internal::FailAt(source, *unit,
+                       "unknown unit '" + q.unit + "' for " + name + " (known: " + UnitList(*spec.units) + ")");
     }
     q.unit_factor = entry->factor;
     if (spec.units == &kAccUnits && q.unit == "g") q.unit_factor = gravity_mps2;
@@ -163,16 +154,17 @@ MappedQuantity ParseQuantity(const std::string& source, const YAML::Node& key, c
     q.range_high = entry->range_high;
   }
   if (scale) {
-    q.scale = ReadNumber(source, *scale, name + " scale");
-    if (q.scale == 0.0) Fail(source, *scale, name + " scale must not be zero");
+    q.scale = internal::ReadYamlNumber(source, *scale, name + " scale");
+    if (q.scale == 0.0) internal::FailAt(source, *scale, name + " scale must not be zero");
   }
   if (range) {
     if (!q.is_command)
-      Fail(source, *range, name + " range applies to command units only (pwm, us, normalized, percent)");
-    if (!range->IsSequence() || range->size() != 2) Fail(source, *range, name + " range must be [low, high]");
-    q.range_low = ReadNumber(source, (*range)[0], name + " range low");
-    q.range_high = ReadNumber(source, (*range)[1], name + " range high");
-    if (!(q.range_high > q.range_low)) Fail(source, *range, name + " range must have high > low");
+      internal::FailAt(source, *range, name + " range applies to command units only (pwm, us, normalized, percent)");
+    if (!range->IsSequence() || range->size() != 2)
+      internal::FailAt(source, *range, name + " range must be [low, high]");
+    q.range_low = internal::ReadYamlNumber(source, (*range)[0], name + " range low");
+    q.range_high = internal::ReadYamlNumber(source, (*range)[1], name + " range high");
+    if (!(q.range_high > q.range_low)) internal::FailAt(source, *range, name + " range must have high > low");
   }
   return q;
 }
@@ -180,13 +172,7 @@ MappedQuantity ParseQuantity(const std::string& source, const YAML::Node& key, c
 }  // namespace
 
 ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw Error(Located(source, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1,
-                        "not valid YAML: " + e.msg));
-  }
+  const YAML::Node root = internal::LoadYaml(text, source);
   if (!root.IsMap()) throw Error(source + ": a column map must be a YAML mapping with time, gyro, acc and rotors");
 
   ColumnMap map;
@@ -201,9 +187,9 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       std::string known;
       for (const auto& k : kKeys) known += (known.empty() ? "" : ", ") + k;
-      Fail(source, it->first, "unknown key '" + key + "' (known: " + known + ")");
+      internal::FailAt(source, it->first, "unknown key '" + key + "' (known: " + known + ")");
     }
-    if (entries.count(key)) Fail(source, it->first, "key '" + key + "' appears twice");
+    if (entries.count(key)) internal::FailAt(source, it->first, "key '" + key + "' appears twice");
     entries.emplace(key, std::make_pair(it->first, it->second));
   }
   auto find = [&](const std::string& key) -> const std::pair<YAML::Node, YAML::Node>* {
@@ -212,8 +198,8 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
   };
 
   if (const auto* g = find("gravity")) {
-    map.gravity_mps2 = ReadNumber(source, g->second, "gravity");
-    if (!(map.gravity_mps2 > 0.0)) Fail(source, g->second, "gravity must be positive (m/s^2)");
+    map.gravity_mps2 = internal::ReadYamlNumber(source, g->second, "gravity");
+    if (!(map.gravity_mps2 > 0.0)) internal::FailAt(source, g->second, "gravity must be positive (m/s^2)");
   }
   if (const auto* f = find("frame")) {
     const std::string frame = ReadString(source, f->second, "frame");
@@ -222,7 +208,7 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
     } else if (frame == "frd") {
       map.frame = BodyFrame::kFrd;
     } else {
-      Fail(source, f->second, "frame must be flu or frd, got '" + frame + "'");
+      internal::FailAt(source, f->second, "frame must be flu or frd, got '" + frame + "'");
     }
   }
   map.world_frame = map.frame == BodyFrame::kFrd ? WorldFrame::kNed : WorldFrame::kZUp;
@@ -233,7 +219,7 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
     } else if (frame == "ned") {
       map.world_frame = WorldFrame::kNed;
     } else {
-      Fail(source, f->second, "world_frame must be zup (also: enu, nwu) or ned, got '" + frame + "'");
+      internal::FailAt(source, f->second, "world_frame must be zup (also: enu, nwu) or ned, got '" + frame + "'");
     }
   }
   if (const auto* d = find("delimiter")) {
@@ -245,21 +231,22 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
     } else if (delimiter.size() == 1 && delimiter != "\"" && delimiter != "\n" && delimiter != "\r") {
       map.delimiter = delimiter[0];
     } else {
-      Fail(source, d->second, "delimiter must be one character (e.g. \",\", \";\", \"\\t\"), tab or whitespace");
+      internal::FailAt(source, d->second,
+                       "delimiter must be one character (e.g. \",\", \";\", \"\\t\"), tab or whitespace");
     }
   }
   if (const auto* c = find("comment")) {
     map.comment = c->second.IsNull() ? "" : ReadString(source, c->second, "comment");
   }
   if (const auto* s = find("skip_lines")) {
-    const double lines = ReadNumber(source, s->second, "skip_lines");
+    const double lines = internal::ReadYamlNumber(source, s->second, "skip_lines");
     if (lines < 0 || lines > 1e6 || lines != std::floor(lines)) {
-      Fail(source, s->second, "skip_lines must be a whole number >= 0");
+      internal::FailAt(source, s->second, "skip_lines must be a whole number >= 0");
     }
     map.skip_lines = static_cast<int>(lines);
   }
   if (const auto* m = find("metadata")) {
-    if (!m->second.IsMap()) Fail(source, m->second, "metadata must be a mapping of key: value");
+    if (!m->second.IsMap()) internal::FailAt(source, m->second, "metadata must be a mapping of key: value");
     for (auto it = m->second.begin(); it != m->second.end(); ++it) {
       map.metadata[ReadString(source, it->first, "metadata key")] = ReadString(source, it->second, "metadata value");
     }

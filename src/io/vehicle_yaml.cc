@@ -1,66 +1,45 @@
 #include "rotorid/io/vehicle_yaml.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 
-#include <yaml-cpp/yaml.h>
-
+#include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/atomic_file.h"
 
 namespace rotorid {
-namespace {
-
-[[noreturn]] void Fail(const std::string& source, const YAML::Node& node, const std::string& message) {
-  const YAML::Mark mark = node.Mark();
-  throw Error(Located(source, mark.is_null() ? 0 : mark.line + 1, mark.is_null() ? 0 : mark.column + 1, message));
-}
-
-double ReadNumber(const std::string& source, const YAML::Node& node, const std::string& what) {
-  if (!node.IsScalar()) Fail(source, node, what + " must be a number");
-  double value = 0.0;
-  if (!YAML::convert<double>::decode(node, value) || !std::isfinite(value))
-    Fail(source, node, what + " must be a finite number, got '" + node.Scalar() + "'");
-  return value;
-}
-
-}  // namespace
-
 Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw Error(Located(source, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1,
-                        "not valid YAML: " + e.msg));
-  }
+  const YAML::Node root = internal::LoadYaml(text, source);
   if (!root.IsMap()) throw Error(source + ": a vehicle file must be a YAML mapping with name, mass and rotors");
   Vehicle vehicle;
   if (const YAML::Node name = root["name"]) {
-    if (!name.IsScalar() || name.Scalar().empty()) Fail(source, name, "name must be a non-empty string");
+    if (!name.IsScalar() || name.Scalar().empty()) internal::FailAt(source, name, "name must be a non-empty string");
     vehicle.name = name.Scalar();
   }
   const YAML::Node mass = root["mass"];
   if (!mass) throw Error(source + ": missing 'mass' (kg)");
-  vehicle.mass_kg = ReadNumber(source, mass, "mass");
-  if (!(vehicle.mass_kg > 0.0)) Fail(source, mass, "mass must be positive (kg)");
+  vehicle.mass_kg = internal::ReadYamlNumber(source, mass, "mass");
+  if (!(vehicle.mass_kg > 0.0)) internal::FailAt(source, mass, "mass must be positive (kg)");
   const YAML::Node rotors = root["rotors"];
   if (!rotors) throw Error(source + ": missing 'rotors'");
-  if (!rotors.IsSequence() || rotors.size() == 0) Fail(source, rotors, "rotors must be a non-empty list");
+  if (!rotors.IsSequence() || rotors.size() == 0) internal::FailAt(source, rotors, "rotors must be a non-empty list");
   for (size_t i = 0; i < rotors.size(); ++i) {
     const YAML::Node rotor = rotors[i];
     const std::string label = "rotor " + std::to_string(i + 1);
-    if (!rotor.IsMap()) Fail(source, rotor, label + " must be a mapping {position: [x, y, z], spin: +1|-1}");
+    if (!rotor.IsMap())
+      internal::FailAt(source, rotor, label + " must be a mapping {position: [x, y, z], spin: +1|-1}");
     const YAML::Node position = rotor["position"];
     if (!position || !position.IsSequence() || position.size() != 3)
-      Fail(source, position ? position : rotor, label + " needs position: [x, y, z] (m)");
+      internal::FailAt(source, position ? position : rotor, label + " needs position: [x, y, z] (m)");
     Rotor r;
-    for (int k = 0; k < 3; ++k) r.position_m[k] = ReadNumber(source, position[k], label + " position");
+    for (int k = 0; k < 3; ++k) r.position_m[k] = internal::ReadYamlNumber(source, position[k], label + " position");
     const YAML::Node spin = rotor["spin"];
-    if (!spin) Fail(source, rotor, label + " needs spin: +1 or -1");
-    const double spin_value = ReadNumber(source, spin, label + " spin");
-    if (spin_value != 1.0 && spin_value != -1.0) Fail(source, spin, label + " spin must be +1 or -1");
+    if (!spin) internal::FailAt(source, rotor, label + " needs spin: +1 or -1");
+    const double spin_value = internal::ReadYamlNumber(source, spin, label + " spin");
+    if (spin_value != 1.0 && spin_value != -1.0) internal::FailAt(source, spin, label + " spin must be +1 or -1");
     r.spin = static_cast<int>(spin_value);
     vehicle.rotors.push_back(r);
   }

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/io/vehicle_yaml.h"
@@ -35,23 +36,11 @@ BodyParameters InertiaFromProducts(const Eigen::Vector3d& first_moment, double i
   return BodyParameters::FromVector(chi);
 }
 
-[[noreturn]] void Fail(const std::string& source, const YAML::Node& node, const std::string& message) {
-  const YAML::Mark mark = node.Mark();
-  throw Error(Located(source, mark.is_null() ? 0 : mark.line + 1, mark.is_null() ? 0 : mark.column + 1, message));
-}
-
-double ReadNumber(const std::string& source, const YAML::Node& node, const std::string& what) {
-  double value = 0.0;
-  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value) || !std::isfinite(value))
-    Fail(source, node, what + " must be a finite number");
-  return value;
-}
-
 Eigen::VectorXd ReadNumbers(const std::string& source, const YAML::Node& node, const std::string& what, int count) {
   if (!node.IsSequence() || static_cast<int>(node.size()) != count)
-    Fail(source, node, what + " must be a list of " + std::to_string(count) + " numbers");
+    internal::FailAt(source, node, what + " must be a list of " + std::to_string(count) + " numbers");
   Eigen::VectorXd values(count);
-  for (int i = 0; i < count; ++i) values[i] = ReadNumber(source, node[i], what);
+  for (int i = 0; i < count; ++i) values[i] = internal::ReadYamlNumber(source, node[i], what);
   return values;
 }
 
@@ -123,22 +112,22 @@ SimulationVehicle ParseSimulationVehicle(const std::string& text, const std::str
         "derived from the mass and arm length of " + source + " (no simulation: mapping in the vehicle file)";
     return result;
   }
-  if (!simulation.IsMap()) Fail(source, simulation, "simulation must be a mapping {kt, kd, ms, inertia}");
+  if (!simulation.IsMap()) internal::FailAt(source, simulation, "simulation must be a mapping {kt, kd, ms, inertia}");
   std::string missing;
   for (const char* key : {"kt", "kd", "ms", "inertia"})
     if (!simulation[key]) missing += std::string(missing.empty() ? "" : ", ") + key;
   for (const auto& entry : simulation) {
     const std::string key = entry.first.as<std::string>();
     if (key != "kt" && key != "kd" && key != "ms" && key != "inertia")
-      Fail(source, entry.first, "unknown key '" + key + "' in simulation (known: kt, kd, ms, inertia)");
+      internal::FailAt(source, entry.first, "unknown key '" + key + "' in simulation (known: kt, kd, ms, inertia)");
   }
   if (const YAML::Node kt = simulation["kt"]) {
-    result.parameters.rotor.kt = ReadNumber(source, kt, "simulation.kt");
-    if (!(result.parameters.rotor.kt > 0.0)) Fail(source, kt, "simulation.kt must be positive (N s^2)");
+    result.parameters.rotor.kt = internal::ReadYamlNumber(source, kt, "simulation.kt");
+    if (!(result.parameters.rotor.kt > 0.0)) internal::FailAt(source, kt, "simulation.kt must be positive (N s^2)");
   }
   if (const YAML::Node kd = simulation["kd"]) {
-    result.parameters.rotor.kd = ReadNumber(source, kd, "simulation.kd");
-    if (!(result.parameters.rotor.kd > 0.0)) Fail(source, kd, "simulation.kd must be positive (N m s^2)");
+    result.parameters.rotor.kd = internal::ReadYamlNumber(source, kd, "simulation.kd");
+    if (!(result.parameters.rotor.kd > 0.0)) internal::FailAt(source, kd, "simulation.kd must be positive (N m s^2)");
   }
   if (const YAML::Node ms = simulation["ms"])
     result.parameters.body.first_moment = ReadNumbers(source, ms, "simulation.ms", 3);
@@ -147,7 +136,8 @@ SimulationVehicle ParseSimulationVehicle(const std::string& text, const std::str
     result.parameters.body =
         InertiaFromProducts(result.parameters.body.first_moment, i[0], i[1], i[2], i[3], i[4], i[5]);
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(result.parameters.body.inertia);
-    if (!(eigen.eigenvalues().minCoeff() > 0.0)) Fail(source, inertia, "simulation.inertia is not positive definite");
+    if (!(eigen.eigenvalues().minCoeff() > 0.0))
+      internal::FailAt(source, inertia, "simulation.inertia is not positive definite");
   }
   result.parameters_source = "simulation: mapping of " + source;
   if (!missing.empty()) result.parameters_source += " (" + missing + " derived from mass and arm length)";
