@@ -21,13 +21,14 @@ namespace {
 
 void Report(const char* flight, const char* signal, const IdentificationResult& linear, const RefineResult& refined) {
   auto pct = [](const std::optional<double>& v) { return v ? *v : -1.0; };
-  std::printf("  %-8s %-8s refined delay %6.1f +- %4.1f ms, motor tau %6.1f +- %4.1f ms | "
-              "Table III Fz/Mx/My/Mz linear %5.1f/%5.1f/%5.1f/%5.1f %% -> refined %5.1f/%5.1f/%5.1f/%5.1f %%\n",
-              flight, signal, 1e3 * refined.effects.delay_s, 1e3 * refined.effects_std.delay_s,
-              1e3 * refined.effects.motor_tau_s, 1e3 * refined.effects_std.motor_tau_s,
-              pct(linear.relative_error_pct[2]), pct(linear.relative_error_pct[3]), pct(linear.relative_error_pct[4]),
-              pct(linear.relative_error_pct[5]), pct(refined.relative_error_pct[2]), pct(refined.relative_error_pct[3]),
-              pct(refined.relative_error_pct[4]), pct(refined.relative_error_pct[5]));
+  std::printf(
+      "  %-8s %-8s refined delay %6.1f +- %4.1f ms, motor tau %6.1f +- %4.1f ms | "
+      "Table III Fz/Mx/My/Mz linear %5.1f/%5.1f/%5.1f/%5.1f %% -> refined %5.1f/%5.1f/%5.1f/%5.1f %%\n",
+      flight, signal, 1e3 * refined.effects.delay_s, 1e3 * refined.effects_std.delay_s,
+      1e3 * refined.effects.motor_tau_s, 1e3 * refined.effects_std.motor_tau_s, pct(linear.relative_error_pct[2]),
+      pct(linear.relative_error_pct[3]), pct(linear.relative_error_pct[4]), pct(linear.relative_error_pct[5]),
+      pct(refined.relative_error_pct[2]), pct(refined.relative_error_pct[3]), pct(refined.relative_error_pct[4]),
+      pct(refined.relative_error_pct[5]));
 }
 
 }  // namespace
@@ -45,10 +46,11 @@ int main(int argc, char** argv) {
       const FlightLog rpm = LoadFlightLog(path, vehicle, rpm_source);
       const FlightLog command = LoadFlightLog(path, vehicle, command_source);
       const MotorResponse direct = EstimateMotorResponse(rpm.t_s, command.rotor_radps, rpm.rotor_radps);
-      std::printf("%s: measured directly (PWM -> RPM, %d samples): delay %.1f ms, motor tau %.1f ms, "
-                  "RPM explained %.1f %% (residual %.0f rad/s)\n",
-                  flight, direct.samples, 1e3 * direct.delay_s, 1e3 * direct.motor_tau_s, direct.explained_pct,
-                  direct.residual_rms);
+      std::printf(
+          "%s: measured directly (PWM -> RPM, %d samples): delay %.1f ms, motor tau %.1f ms, "
+          "RPM explained %.1f %% (residual %.0f rad/s)\n",
+          flight, direct.samples, 1e3 * direct.delay_s, 1e3 * direct.motor_tau_s, direct.explained_pct,
+          direct.residual_rms);
       for (const auto& [signal, log] : {std::pair<const char*, const FlightLog*>{"rpm", &rpm}, {"pwm", &command}}) {
         IdentifyOptions identify;
         identify.allow_partial = true;

@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "rotorid/ident/identify.h"
-#include "rotorid/refine/delay.h"
 #include "rotorid/model/rotation.h"
+#include "rotorid/refine/delay.h"
 #include "rotorid/refine/refine.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/realistic_effects.h"
@@ -31,7 +31,6 @@ struct Case {
   std::string label;
   std::vector<EffectKind> kinds;
 };
-
 
 double RelErr(double estimate, double truth) { return 100.0 * std::abs(estimate - truth) / std::abs(truth); }
 
@@ -126,7 +125,9 @@ int main(int argc, char** argv) {
         std::string truth, estimate;
         for (EffectKind k : c.kinds) {
           const Eigen::VectorXd t = sim.effects.Get(k), e = refined.effects.Get(k), s = refined.effects_std.Get(k);
-          const double unit = k == EffectKind::kMisalignment ? 180 / M_PI : (k == EffectKind::kDelay || k == EffectKind::kMotorLag ? 1000 : 1);
+          const double unit = k == EffectKind::kMisalignment
+                                  ? 180 / M_PI
+                                  : (k == EffectKind::kDelay || k == EffectKind::kMotorLag ? 1000 : 1);
           for (int i = 0; i < t.size(); ++i) {
             std::snprintf(buffer, sizeof(buffer), "%.3g ", t[i] * unit);
             truth += buffer;

@@ -92,8 +92,11 @@ class HeldOutEvaluator {
   HeldOutEvaluator(const DiagnosisOptions& options, std::vector<internal::Fold> folds,
                    std::vector<IdentificationResult> fold_linear, int num_evaluation_flights,
                    const DiagnosisProgress& progress)
-      : options_(options), folds_(std::move(folds)), fold_linear_(std::move(fold_linear)),
-        num_evaluation_flights_(num_evaluation_flights), progress_(progress) {}
+      : options_(options),
+        folds_(std::move(folds)),
+        fold_linear_(std::move(fold_linear)),
+        num_evaluation_flights_(num_evaluation_flights),
+        progress_(progress) {}
 
   int num_folds() const { return static_cast<int>(folds_.size()); }
   int refinements() const { return refinements_; }
@@ -142,7 +145,7 @@ class HeldOutEvaluator {
         refine.coarse_delay_search = false;  // started from the diagnosis' own search
         refine.compute_covariance = false;   // std come from the linearisation
         refine.max_iterations = options_.refine_max_iterations;
-        refine.num_threads = 1;              // parallel over models and folds instead
+        refine.num_threads = 1;  // parallel over models and folds instead
         refine.reselect_essential = options_.reselect_essential;
         const RefineResult result = Refine(fold_linear_[k], refine);
         records[m].fold_effects[k] = result.effects;
@@ -234,10 +237,20 @@ std::string FormatEffectMagnitude(EffectKind kind, const Eigen::VectorXd& value,
   const char* unit_name = "";
   switch (kind) {
     case EffectKind::kDelay:
-    case EffectKind::kMotorLag: unit = 1e3; unit_name = " ms"; break;
-    case EffectKind::kAccBias: unit_name = " m/s^2"; break;
-    case EffectKind::kGyroBias: unit_name = " rad/s"; break;
-    case EffectKind::kMisalignment: unit = 180.0 / M_PI; unit_name = " deg"; break;
+    case EffectKind::kMotorLag:
+      unit = 1e3;
+      unit_name = " ms";
+      break;
+    case EffectKind::kAccBias:
+      unit_name = " m/s^2";
+      break;
+    case EffectKind::kGyroBias:
+      unit_name = " rad/s";
+      break;
+    case EffectKind::kMisalignment:
+      unit = 180.0 / M_PI;
+      unit_name = " deg";
+      break;
   }
   std::ostringstream out;
   auto entry = [&](Eigen::Index k) {
@@ -314,7 +327,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     folds.push_back(std::move(fold));
     fold_linear.push_back(full);
     num_evaluation_flights = static_cast<int>(held_out.size());
-    diagnosis.validation = std::to_string(held_out.size()) + (held_out.size() == 1 ? " held-out flight" : " held-out flights");
+    diagnosis.validation =
+        std::to_string(held_out.size()) + (held_out.size() == 1 ? " held-out flight" : " held-out flights");
   }
   mark("fold identifications");
   HeldOutEvaluator evaluator(options, std::move(folds), std::move(fold_linear), num_evaluation_flights, progress);
@@ -336,7 +350,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     if (delay_searched) return;
     delay_searched = true;
     std::vector<double> grid;
-    for (double d = options.delay_search_min_s; d <= options.delay_search_max_s + 1e-12; d += options.delay_search_step_s)
+    for (double d = options.delay_search_min_s; d <= options.delay_search_max_s + 1e-12;
+         d += options.delay_search_step_s)
       grid.push_back(d);
     std::vector<double> criterion(grid.size());
     ParallelFor(static_cast<int>(grid.size()), options.num_threads, [&](int i) {
@@ -407,12 +422,11 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       for (EffectKind k : KindsOf(selected | Bit(kind))) t.linearized_step.Set(k, columns_of(fit, k, fit.step));
       if (kind == EffectKind::kMotorLag) t.linearized_value = t.linearized_value.cwiseMax(0.0);  // tau >= 0
       // tau >= 0: at the bound, a first-order step below it gains nothing.
-      const bool blocked_by_bound = kind == EffectKind::kMotorLag && point_effects.motor_tau_s <= 0.0 &&
-                                    columns_of(fit, kind, fit.step)[0] < 0.0;
+      const bool blocked_by_bound =
+          kind == EffectKind::kMotorLag && point_effects.motor_tau_s <= 0.0 && columns_of(fit, kind, fit.step)[0] < 0.0;
       const double predicted = blocked_by_bound ? 0.0 : std::max(0.0, fit.predicted_shrink - base_shrink);
-      t.screening = internal::ScreeningTest(predicted, EffectDimension(kind),
-                                            fit.effective_samples, linearization.scored_rows, options.alpha,
-                                            options.min_shrink_pct);
+      t.screening = internal::ScreeningTest(predicted, EffectDimension(kind), fit.effective_samples,
+                                            linearization.scored_rows, options.alpha, options.min_shrink_pct);
       t.test = t.screening;
       if (step == 1) t.alone = t.test;
       best_predicted = std::max(best_predicted, t.screening.shrink_pct);
@@ -439,9 +453,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
         // moves the effects already selected (adding a lag on top of a delay shortens the delay).
         // The rotor-signal effects are nonlinear far from zero: alone, they start where the coarse
         // delay search points instead.
-        const bool rotor_alone =
-            (kind == EffectKind::kDelay && !Has(selected, EffectKind::kMotorLag)) ||
-            (kind == EffectKind::kMotorLag && !Has(selected, EffectKind::kDelay));
+        const bool rotor_alone = (kind == EffectKind::kDelay && !Has(selected, EffectKind::kMotorLag)) ||
+                                 (kind == EffectKind::kMotorLag && !Has(selected, EffectKind::kDelay));
         for (EffectKind k : KindsOf(selected | Bit(kind))) start.Set(k, start.Get(k) + step_effects.Get(k));
         start.motor_tau_s = std::max(start.motor_tau_s, 0.0);
         if (rotor_alone && kind == EffectKind::kDelay) start.delay_s = diagnosis.initial_delay_s;
@@ -554,8 +567,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       prefix |= Bit(kind);
       if (!records.count(prefix)) break;
       s.after = records.at(prefix).gap;
-      s.test = internal::TestAddedEffects(s.before, s.after, EffectDimension(kind), options.alpha,
-                                          options.min_shrink_pct);
+      s.test =
+          internal::TestAddedEffects(s.before, s.after, EffectDimension(kind), options.alpha, options.min_shrink_pct);
       diagnosis.steps.push_back(s);
     }
   }
@@ -690,8 +703,9 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       note << std::fixed << std::setprecision(1) << EffectName(other) << " alone removes " << c.other_shrink_pct
            << " % of the held-out residual, " << EffectName(step.added) << " " << c.selected_shrink_pct << " %";
       if (c.distinguishable)
-        note << "; " << EffectName(step.added) << " fits the held-out rows significantly better (t = "
-             << std::setprecision(1) << c.t_statistic << "): the data tell them apart";
+        note << "; " << EffectName(step.added)
+             << " fits the held-out rows significantly better (t = " << std::setprecision(1) << c.t_statistic
+             << "): the data tell them apart";
       else
         note << "; the difference is not significant (t = " << std::setprecision(1) << c.t_statistic
              << "): these flights cannot tell " << EffectName(step.added) << " and " << EffectName(other) << " apart";
@@ -806,8 +820,8 @@ std::string DiagnosisVerdict(const Diagnosis& d) {
     out << ";\n       mostly at " << std::setprecision(0) << bg.low_hz << "-" << bg.high_hz << " Hz ("
         << bg.share_pct[j] << " % of its residual energy";
     if (!d.selected.empty() && bg.residual_rms[j] > 0.0)
-      out << ", of which the selected effects remove " << 100.0 * removed(bg) / (bg.residual_rms[j] * bg.residual_rms[j])
-          << " %";
+      out << ", of which the selected effects remove "
+          << 100.0 * removed(bg) / (bg.residual_rms[j] * bg.residual_rms[j]) << " %";
     out << ")";
   }
   if (!d.where.worst_stretches.empty()) {
@@ -826,10 +840,10 @@ std::string DiagnosisVerdict(const Diagnosis& d) {
   }
   for (const EffectVerdict& v : d.ranking) {
     if (v.selected) {
-      out << (v.kind == d.selected.front() ? "which: " : "     + ") << EffectName(v.kind) << " = " << FormatEffectMagnitude(v.kind, v.value, v.std)
-          << " (F = " << std::setprecision(1) << v.test.f_statistic << ", p = " << std::scientific
-          << std::setprecision(1) << v.test.p_value << std::fixed << "; held-out gap shrinks " << std::setprecision(1)
-          << v.test.shrink_pct << " %)\n";
+      out << (v.kind == d.selected.front() ? "which: " : "     + ") << EffectName(v.kind) << " = "
+          << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
+          << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
+          << "; held-out gap shrinks " << std::setprecision(1) << v.test.shrink_pct << " %)\n";
     }
   }
   for (const ConfoundedEffects& c : d.confounded) {

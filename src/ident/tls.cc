@@ -1,11 +1,10 @@
 #include "rotorid/ident/tls.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
-
-#include <Eigen/Dense>
 
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
@@ -103,7 +102,7 @@ struct CoreSolve {
   Eigen::VectorXd chi_t;       // over `columns` (free parameters then the last column), last = 1
   Eigen::MatrixXd covariance;  // over the free parameters
   Eigen::VectorXd row_weight;
-  Eigen::MatrixXd metric;      // over `columns`
+  Eigen::MatrixXd metric;  // over `columns`
   Eigen::VectorXd singular_values;
   double sigma_w = 0.0;
   double scale_entry = 1.0;
@@ -347,8 +346,7 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
       // inertias of its last cross terms; its weight would then grow without bound (the degenerate
       // likelihood of per-group variances). A real fit does not lower a group's variance tenfold
       // from the unweighted start of the full model, so that bounds it.
-      const double total_var =
-          std::max({residual_var, noise_var, floor, kMaxVarianceDrop * (*start_var)[g]});
+      const double total_var = std::max({residual_var, noise_var, floor, kMaxVarianceDrop * (*start_var)[g]});
       const double equation_var = total_var - noise_var;
       const double user = system.flight_weight[IdimSystem::Flight(g)];
       group_weight[g] = user * user / total_var;
@@ -359,8 +357,8 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
     const Eigen::VectorXd previous = out.chi_t;
     out.chi_t = GeneralizedTls(r, metric, &out.scale_entry, &out.singular_values, &out.metric, &out.direction);
     out.iterations = it;
-    const double change = ((out.chi_t - previous).cwiseAbs().array() /
-                           (previous.cwiseAbs().array() + 1e-300)).maxCoeff();
+    const double change =
+        ((out.chi_t - previous).cwiseAbs().array() / (previous.cwiseAbs().array() + 1e-300)).maxCoeff();
     if (!(change > 1e-10)) break;
   }
   out.row_weight = RowWeights(system, group_weight);
@@ -380,7 +378,8 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
   out.sigma_w = std::sqrt(resid.squaredNorm() / std::max(1, rows - (n - 1)));
   const Eigen::MatrixXd gram = (r.transpose() * r).topLeftCorner(n - 1, n - 1);
   const Eigen::VectorXd u = (r.transpose() * (r * out.chi_t)).head(n - 1) / d;
-  const Eigen::MatrixXd h = gram / d_sq - (u * c.transpose() + c * u.transpose()) / d + resid.squaredNorm() * c * c.transpose();
+  const Eigen::MatrixXd h =
+      gram / d_sq - (u * c.transpose() + c * u.transpose()) / d + resid.squaredNorm() * c * c.transpose();
   const int lag = AutocorrelationLag(resid, system);
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(n - 1, n - 1);
   int begin = 0;
@@ -445,8 +444,8 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
     if (std::find(system.parameter_names.begin(), system.parameter_names.end(), name) == system.parameter_names.end())
       throw Error("cannot fix unknown parameter '" + name + "'");
   if (free.empty()) throw Error("every parameter is fixed; nothing to identify");
-  if (system.w.rows() <= p + 1) throw Error("too few rows (" + std::to_string(system.w.rows()) + ") for " +
-                                            std::to_string(p) + " parameters");
+  if (system.w.rows() <= p + 1)
+    throw Error("too few rows (" + std::to_string(system.w.rows()) + ") for " + std::to_string(p) + " parameters");
 
   const GroupFactors factors = FactorGroups(system);
   // Per group, set by the first (full-model) noise-aware solve; -1 until then.
@@ -476,8 +475,8 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
       dropped.std = std::numeric_limits<double>::infinity();
       dropped.most_correlated = second >= 0 ? system.parameter_names[free[second]] : "";
       dropped.correlation = 1.0;
-      dropped.reason = "not identifiable: only a combination with " + dropped.most_correlated +
-                       " is determined by these flights";
+      dropped.reason =
+          "not identifiable: only a combination with " + dropped.most_correlated + " is determined by these flights";
       solution.discarded.push_back(dropped);
       free.erase(free.begin() + first);
       continue;

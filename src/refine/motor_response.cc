@@ -1,10 +1,9 @@
 #include "rotorid/refine/motor_response.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Dense>
 
 #include "rotorid/core/error.h"
 #include "rotorid/ident/observation.h"

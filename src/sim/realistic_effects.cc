@@ -13,8 +13,12 @@ Effects DrawRealisticEffects(const std::vector<EffectKind>& kinds, RandomStream*
   Effects e;
   for (EffectKind kind : kinds) {
     switch (kind) {
-      case EffectKind::kDelay: e.delay_s = random->Uniform(range.delay_min_s, range.delay_max_s); break;
-      case EffectKind::kMotorLag: e.motor_tau_s = random->Uniform(range.motor_tau_min_s, range.motor_tau_max_s); break;
+      case EffectKind::kDelay:
+        e.delay_s = random->Uniform(range.delay_min_s, range.delay_max_s);
+        break;
+      case EffectKind::kMotorLag:
+        e.motor_tau_s = random->Uniform(range.motor_tau_min_s, range.motor_tau_max_s);
+        break;
       case EffectKind::kAccBias:
         for (int a = 0; a < 3; ++a) e.acc_bias[a] = signed_size(range.acc_bias_min, range.acc_bias_max);
         break;

@@ -2,11 +2,11 @@
 // rotor speed from the RPM deck). The references are the thrust stands and the flight check of its
 // SOURCE.md; skipped when the shared data is absent.
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "rotorid/ident/identify.h"
 #include "rotorid/io/flight_source.h"
@@ -55,8 +55,8 @@ TEST(RealFlightIdentification, BrushedCrazyflieMatchesTheThrustStand) {
 // collapse (kd, I_zz -> 0 and the yaw group's weight without bound).
 TEST(RealFlightIdentification, BrushlessCrazyflieMatchesTheThrustStand) {
   if (!testing::SharedDataPath("real/crazyflie-imrc-rpm")) GTEST_SKIP() << "shared IMRC Crazyflie data not present";
-  for (const std::vector<std::string>& names :
-       std::vector<std::vector<std::string>>{{"eckart00"}, {"eckart17"}, {"eckart34"}, {"eckart00", "eckart17", "eckart34"}}) {
+  for (const std::vector<std::string>& names : std::vector<std::vector<std::string>>{
+           {"eckart00"}, {"eckart17"}, {"eckart34"}, {"eckart00", "eckart17", "eckart34"}}) {
     SCOPED_TRACE(names.size() == 1 ? names[0] : "all three");
     const IdentificationResult r = IdentifyImrc("brushless", names);
     EXPECT_NEAR(Parameter(r, "kt"), 3.86e-8, 0.1 * 3.86e-8);

@@ -1,8 +1,8 @@
 #include "rotorid/sim/realistic_effects.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "rotorid/core/units.h"
 

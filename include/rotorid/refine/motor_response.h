@@ -6,9 +6,8 @@
 // (effect_model.h), plus the static map from the lagged command to speed. It is the reference the
 // refinement's estimates from command-driven identification are compared with.
 
-#include <string>
-
 #include <Eigen/Core>
+#include <string>
 
 namespace rotorid {
 
@@ -26,7 +25,7 @@ struct MotorResponse {
   double motor_tau_s = 0.0;
   // speed = c0 + c1 y + c2 y^2, y the delayed and lagged command (pooled over the rotors).
   Eigen::Vector3d static_map = Eigen::Vector3d::Zero();
-  double residual_rms = 0.0;  // of the speed, in its unit
+  double residual_rms = 0.0;   // of the speed, in its unit
   double explained_pct = 0.0;  // 100 (1 - residual variance / speed variance)
   int samples = 0;
 };
