@@ -1,5 +1,6 @@
 #include "rotorid/refine/ablate.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <mutex>
@@ -15,6 +16,12 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
   if (effects.size() > 8) throw Error("ablation over more than 8 effects (256 refinements) is not supported");
   if (const std::string problem = base.Validate(); !problem.empty()) throw Error(problem);
   const int subsets = 1 << effects.size();
+  // Every subset with a delay would start from the same global delay search: do it once.
+  RefineOptions shared = base;
+  if (shared.coarse_delay_search && std::find(effects.begin(), effects.end(), EffectKind::kDelay) != effects.end()) {
+    shared.initial.delay_s = CoarseDelaySearch(linear, shared);
+    shared.coarse_delay_search = false;
+  }
   AblationResult out;
   out.entries.resize(subsets);
   std::atomic<int> next{0}, done{0};
@@ -26,8 +33,10 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
         AblationEntry& entry = out.entries[s];
         for (size_t k = 0; k < effects.size(); ++k)
           if (s & (1 << k)) entry.effects.push_back(effects[k]);
-        RefineOptions options = base;
+        RefineOptions options = shared;
         options.effects = entry.effects;
+        // Subsets without the delay keep it at the caller's initial value, not the search's.
+        if (!options.Enabled(EffectKind::kDelay)) options.initial.delay_s = base.initial.delay_s;
         options.num_threads = 1;
         options.compute_covariance = false;
         entry.result = Refine(linear, options);
@@ -56,13 +65,18 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
   if (failure) std::rethrow_exception(failure);
 
   // Information criteria on the whitened residuals, with the sample count divided by the
-  // autocorrelation factor of the effect-free fit so that every subset is charged alike.
+  // autocorrelation factor of the fit with every candidate effect (the least misspecified one: the
+  // effect-free residual's memory is mostly the missing effects'), so that every subset is charged
+  // alike. The
+  // residuals are whitened by the linear step's weights and metric for every subset
+  // (refined_criterion): each refinement's own final cost is not comparable across subsets, since
+  // re-running the TLS on effect-corrected rows re-estimates the weights.
   const double rows = static_cast<double>(linear.system.w.rows());
-  const double factor = std::max(1.0, out.entries[0].result.autocorrelation_factor);
+  const double factor = std::max(1.0, out.entries.back().result.autocorrelation_factor);
   out.effective_samples = rows / factor;
   for (AblationEntry& entry : out.entries) {
-    const double rss = std::max(2.0 * entry.result.solver.final_cost, 1e-300);
-    const double log_term = out.effective_samples * std::log(rss / rows);
+    const double mean_square = std::max(entry.result.refined_criterion, 1e-300);
+    const double log_term = out.effective_samples * std::log(mean_square);
     entry.aic = log_term + 2.0 * entry.num_parameters;
     entry.bic = log_term + entry.num_parameters * std::log(out.effective_samples);
   }

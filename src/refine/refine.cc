@@ -1,19 +1,18 @@
 #include "rotorid/refine/refine.h"
 
+#include <ceres/ceres.h>
+
+#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <mutex>
 
-#include <Eigen/SVD>
-
-#include <ceres/ceres.h>
-
+#include "refine/idim_residual.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/refine/effect_model.h"
-#include "refine/idim_residual.h"
 
 namespace rotorid {
 
@@ -95,11 +94,16 @@ constexpr int kRowSamplesPerBlock = 64;
 
 std::string TerminationName(ceres::TerminationType type) {
   switch (type) {
-    case ceres::CONVERGENCE: return "convergence";
-    case ceres::NO_CONVERGENCE: return "no convergence (iteration limit)";
-    case ceres::FAILURE: return "failure";
-    case ceres::USER_SUCCESS: return "user success";
-    case ceres::USER_FAILURE: return "user failure";
+    case ceres::CONVERGENCE:
+      return "convergence";
+    case ceres::NO_CONVERGENCE:
+      return "no convergence (iteration limit)";
+    case ceres::FAILURE:
+      return "failure";
+    case ceres::USER_SUCCESS:
+      return "user success";
+    case ceres::USER_FAILURE:
+      return "user failure";
   }
   return "unknown";
 }
@@ -295,8 +299,8 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   result.effects.motor_tau_s = tau;
   result.effects.acc_bias = acc_bias;
   result.effects.gyro_bias = gyro_bias;
-  const Eigen::AngleAxisd aa(Eigen::Quaterniond(misalignment[3], misalignment[0], misalignment[1], misalignment[2])
-                                 .normalized());
+  const Eigen::AngleAxisd aa(
+      Eigen::Quaterniond(misalignment[3], misalignment[0], misalignment[1], misalignment[2]).normalized());
   result.effects.misalignment_rad = aa.angle() * aa.axis();
 
   result.refined = tls;
@@ -364,11 +368,14 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
       result.effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
     } else if (!blocks.empty()) {
       result.rank_deficient = true;
-      result.confounded = NullSpaceParameters(&problem, blocks, linear.system, free, effect_blocks_labels(effect_blocks));
+      result.confounded =
+          NullSpaceParameters(&problem, blocks, linear.system, free, effect_blocks_labels(effect_blocks));
       std::string names;
       for (const std::string& n : result.confounded) names += (names.empty() ? "" : ", ") + n;
-      result.warnings.push_back("the refined parameters are not jointly identifiable from these flights (rank-deficient "
-                                "Jacobian); confounded: " + names + ". Their std is not reported.");
+      result.warnings.push_back(
+          "the refined parameters are not jointly identifiable from these flights (rank-deficient "
+          "Jacobian); confounded: " +
+          names + ". Their std is not reported.");
     }
   }
   result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
@@ -377,25 +384,46 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   return result;
 }
 
+// Change of an effect parameter between passes below which the passes have settled when no std
+// is computed: a hundredth of the smallest sizes a 90 s flight reveals (refinement study).
+double SettleTolerance(EffectKind kind) {
+  switch (kind) {
+    case EffectKind::kDelay:
+    case EffectKind::kMotorLag:
+      return 1e-5;  // s
+    case EffectKind::kAccBias:
+      return 1e-4;  // m/s^2
+    case EffectKind::kGyroBias:
+      return 1e-4;  // rad/s
+    case EffectKind::kMisalignment:
+      return 1e-5;  // rad
+  }
+  return 0.0;
+}
+
 }  // namespace
+
+double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options) {
+  Effects trial = options.initial;
+  double best = INFINITY, best_delay = options.initial.delay_s;
+  for (double delay = options.delay_search_min_s; delay <= options.delay_search_max_s + 1e-12;
+       delay += options.delay_search_step_s) {
+    trial.delay_s = delay;
+    const double value = EffectCriterion(linear, trial);
+    if (value < best) {
+      best = value;
+      best_delay = delay;
+    }
+  }
+  return best_delay;
+}
 
 RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   Effects start = options.initial;
   const double linear_criterion = EffectCriterion(linear, Effects{});
-  if (options.Enabled(EffectKind::kDelay) && options.coarse_delay_search) {
-    double best = INFINITY;
-    for (double delay = options.delay_search_min_s; delay <= options.delay_search_max_s + 1e-12;
-         delay += options.delay_search_step_s) {
-      Effects trial = start;
-      trial.delay_s = delay;
-      const double value = EffectCriterion(linear, trial);
-      if (value < best) {
-        best = value;
-        start.delay_s = delay;
-      }
-    }
-  }
+  if (options.Enabled(EffectKind::kDelay) && options.coarse_delay_search)
+    start.delay_s = CoarseDelaySearch(linear, options);
   RefineResult result = SolveEffects(linear, linear.solution, start, options);
   if (options.reselect_essential && !options.effects.empty()) {
     // The TLS weights and equation-error variances of the linear step were fitted to the residual of
@@ -414,19 +442,25 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       RefineResult candidate = SolveEffects(restarted, reselected, result.effects, next);
       candidate.reselected = reselected;
       result = std::move(candidate);
-      // Settled when no effect coordinate moved by more than a tenth of its std.
+      // Settled when no effect coordinate moved by more than a tenth of its std (without a
+      // covariance: by more than a size far below anything these equations detect).
       bool settled = true;
       for (EffectKind kind : options.effects) {
         const Eigen::VectorXd change = (result.effects.Get(kind) - previous.Get(kind)).cwiseAbs();
         const Eigen::VectorXd std_dev = result.effects_std.Get(kind);
-        for (Eigen::Index k = 0; k < change.size(); ++k) settled = settled && change[k] <= 0.1 * std_dev[k] + 1e-12;
+        for (Eigen::Index k = 0; k < change.size(); ++k) {
+          const double tolerance = std_dev[k] > 0.0 ? 0.1 * std_dev[k] : SettleTolerance(kind);
+          settled = settled && change[k] <= tolerance + 1e-12;
+        }
       }
       if (settled) break;
       previous = result.effects;
     }
   }
   // Estimates on a bound are not estimates.
-  auto at_bound = [](double v, double lo, double hi) { return v <= lo + 1e-9 * (hi - lo) || v >= hi - 1e-9 * (hi - lo); };
+  auto at_bound = [](double v, double lo, double hi) {
+    return v <= lo + 1e-9 * (hi - lo) || v >= hi - 1e-9 * (hi - lo);
+  };
   std::vector<std::string> bounded;
   if (options.Enabled(EffectKind::kDelay) &&
       at_bound(result.effects.delay_s, options.delay_search_min_s, options.delay_search_max_s))
@@ -442,7 +476,8 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       bounded.push_back("gyro_bias");
   }
   for (const std::string& name : bounded)
-    result.warnings.push_back(name + " ended on the bound of its physical range: these flights do not determine it "
+    result.warnings.push_back(name +
+                              " ended on the bound of its physical range: these flights do not determine it "
                               "(or the residual has a cause outside the modelled effects); do not trust it");
   result.linear_criterion = linear_criterion;
   result.refined_criterion = EffectCriterion(linear, result.effects);

@@ -6,11 +6,10 @@
 // with the row weights lambda and column metric N of the TLS step, so that with every effect off
 // it returns the TLS solution and any difference is caused by the effects alone.
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rotorid/ident/identify.h"
 #include "rotorid/model/effects.h"
@@ -59,7 +58,7 @@ struct SolverReport {
 };
 
 struct RefineResult {
-  TlsSolution refined;        // chi, covariance and std of the refined parameters and which are essential
+  TlsSolution refined;  // chi, covariance and std of the refined parameters and which are essential
   // The TLS on effect-corrected rows that started the final pass (when essential parameters were
   // re-selected); its discarded list says what the refinement still cannot identify.
   std::optional<TlsSolution> reselected;
@@ -71,7 +70,7 @@ struct RefineResult {
   std::vector<std::string> effect_labels;
   Eigen::MatrixXd effect_correlation;
   std::vector<std::optional<double>> relative_error_pct;  // identification flights, refined model
-  double linear_criterion = 0.0;   // TLS criterion (mean squared whitened residual) before and after
+  double linear_criterion = 0.0;  // TLS criterion (mean squared whitened residual) before and after
   double refined_criterion = 0.0;
   // Factor by which autocorrelated residuals inflate the parameter variance (already applied).
   double autocorrelation_factor = 1.0;
@@ -83,6 +82,10 @@ struct RefineResult {
 };
 
 RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options);
+
+// The coarse global delay search Refine starts from (options.delay_search_*, the other effects at
+// options.initial): the grid delay with the smallest TLS criterion.
+double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options);
 
 // Table III of several flights with named parameters and effects applied.
 std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<ProcessedFlight>& flights,

@@ -1,0 +1,78 @@
+#include "rotorid/refine/ablate.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "rotorid/core/error.h"
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+
+namespace rotorid {
+namespace {
+
+IdentificationResult IdentifyFlight(const Effects& effects, unsigned seed, double seconds) {
+  const SimulationVehicle v = PresetVehicle("B");
+  SimulationOptions sim;
+  sim.duration_s = seconds;
+  sim.seed = seed;
+  sim.effects = effects;
+  const SimulationResult flight = Simulate(v.vehicle, v.parameters, sim);
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  return Identify({{flight.vehicle, flight.log, 1.0}}, identify);
+}
+
+// A flight with a delay and a motor lag, ablated over {delay, motor_lag, acc_bias}: every subset is
+// refined, the effect-free one is the TLS fit, and both criteria rank the true pair first; adding
+// the acc bias it does not have is charged for its parameters.
+TEST(AblateTest, InformationCriteriaPickTheInjectedEffects) {
+  Effects injected;
+  injected.delay_s = 0.015;
+  injected.motor_tau_s = 0.03;
+  const IdentificationResult linear = IdentifyFlight(injected, 5, 60.0);
+  const std::vector<EffectKind> candidates = {EffectKind::kDelay, EffectKind::kMotorLag, EffectKind::kAccBias};
+  int progress_calls = 0;
+  const AblationResult ablation = Ablate(linear, {}, candidates, RefineOptions{}, 2, [&](int done, int total) {
+    EXPECT_LE(done, total);
+    ++progress_calls;
+  });
+  ASSERT_EQ(ablation.entries.size(), 8u);
+  EXPECT_EQ(progress_calls, 8);
+  int essential = 0;
+  for (bool e : linear.solution.essential) essential += e;
+  for (const AblationEntry& entry : ablation.entries) {
+    int dimension = 0;
+    for (EffectKind k : entry.effects) dimension += EffectDimension(k);
+    EXPECT_EQ(entry.num_parameters, essential + dimension);
+  }
+  EXPECT_TRUE(ablation.entries[0].effects.empty());
+  EXPECT_NEAR(ablation.entries[0].result.refined_criterion, ablation.entries[0].result.linear_criterion,
+              1e-9 * ablation.entries[0].result.linear_criterion);
+
+  auto best_by = [&](auto criterion) {
+    return std::min_element(ablation.entries.begin(), ablation.entries.end(),
+                            [&](const AblationEntry& a, const AblationEntry& b) { return criterion(a) < criterion(b); })
+        ->effects;
+  };
+  const std::vector<EffectKind> truth = {EffectKind::kDelay, EffectKind::kMotorLag};
+  EXPECT_EQ(best_by([](const AblationEntry& e) { return e.bic; }), truth);
+  EXPECT_EQ(best_by([](const AblationEntry& e) { return e.aic; }), truth);
+  // The true pair's estimates.
+  const AblationEntry& pair = ablation.entries[3];
+  ASSERT_EQ(pair.effects, truth);
+  EXPECT_NEAR(pair.result.effects.delay_s, 0.015, 1e-3);
+  EXPECT_NEAR(pair.result.effects.motor_tau_s, 0.03, 3e-3);
+  // Every effect subset fits at least as well as no effect at all (nested models).
+  for (const AblationEntry& entry : ablation.entries)
+    EXPECT_LE(entry.result.refined_criterion, ablation.entries[0].result.refined_criterion * (1 + 1e-6));
+}
+
+TEST(AblateTest, RefusesTooManyEffects) {
+  const IdentificationResult linear = IdentifyFlight({}, 2, 10.0);
+  const std::vector<EffectKind> nine(9, EffectKind::kDelay);
+  EXPECT_THROW(Ablate(linear, {}, nine, RefineOptions{}, 1), Error);
+}
+
+}  // namespace
+}  // namespace rotorid
