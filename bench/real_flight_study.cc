@@ -1,13 +1,16 @@
 // Real Crazyflie flights with both the PWM command and the measured rotor speed (IMRC Lab, RPM
 // deck; ../shared/data/real/crazyflie-imrc-rpm): the motors' delay and time constant measured
 // directly (command -> RPM), against what the refinement estimates when it is driven by the PWM
-// command alone, and by the measured RPM (where they should mostly vanish).
+// command alone (as recorded, and through the vehicle file's command_to_speed map), and by the
+// measured RPM (where they should mostly vanish).
 //
 //   real_flight_study [data folder=../shared/data/real/crazyflie-imrc-rpm] [vehicle file]
 
 #include <cstdio>
 #include <exception>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "rotorid/ident/identify.h"
 #include "rotorid/io/flight_source.h"
@@ -44,21 +47,26 @@ int main(int argc, char** argv) {
       rpm_source.rotor_signal = "rpm";
       command_source.rotor_signal = "command";
       const FlightLog rpm = LoadFlightLog(path, vehicle, rpm_source);
-      const FlightLog command = LoadFlightLog(path, vehicle, command_source);
-      const MotorResponse direct = EstimateMotorResponse(rpm.t_s, command.rotor_radps, rpm.rotor_radps);
+      const FlightLog pwm = LoadFlightLogAsRecorded(path, vehicle, command_source);
+      const MotorResponse direct = EstimateMotorResponse(rpm.t_s, pwm.rotor_radps, rpm.rotor_radps);
       std::printf(
           "%s: measured directly (PWM -> RPM, %d samples): delay %.1f ms, motor tau %.1f ms, "
           "RPM explained %.1f %% (residual %.0f rad/s)\n",
           flight, direct.samples, 1e3 * direct.delay_s, 1e3 * direct.motor_tau_s, direct.explained_pct,
           direct.residual_rms);
-      for (const auto& [signal, log] : {std::pair<const char*, const FlightLog*>{"rpm", &rpm}, {"pwm", &command}}) {
+      std::vector<std::pair<const char*, FlightLog>> signals = {{"rpm", rpm}, {"pwm", pwm}};
+      if (vehicle.command_to_speed) signals.push_back({"pwm->map", LoadFlightLog(path, vehicle, command_source)});
+      for (const auto& [signal, log] : signals) {
         IdentifyOptions identify;
         identify.allow_partial = true;
-        const IdentificationResult linear = Identify({{vehicle, *log, 1.0}}, identify);
+        const IdentificationResult linear = Identify({{vehicle, log, 1.0}}, identify);
         RefineOptions options;
         options.effects = {EffectKind::kDelay, EffectKind::kMotorLag};
         options.num_threads = 2;
-        Report(flight, signal, linear, Refine(linear, options));
+        const RefineResult refined = Refine(linear, options);
+        Report(flight, signal, linear, refined);
+        std::printf("  %-8s %-8s kt linear %.4g, refined %.4g (unit: N per rotor-signal unit squared)\n", flight,
+                    signal, linear.solution.chi[0], refined.refined.chi[0]);
       }
       std::fflush(stdout);
     }

@@ -27,7 +27,29 @@ LogFormat DetectLogFormat(const std::string& path) {
   return LogFormat::kCsv;
 }
 
+bool RotorSignalIsCommand(const FlightLog& log) {
+  const auto is = [&](const char* key, const char* value) {
+    const auto it = log.metadata.find(key);
+    return it != log.metadata.end() && it->second == value;
+  };
+  return is("rotor_signal", "command") || is("px4_rotor_signal", "command");
+}
+
+void ApplyCommandToSpeed(const CommandToSpeed& map, FlightLog* log) {
+  log->rotor_radps = log->rotor_radps.unaryExpr([&](double u) { return map(u); });
+  const Eigen::Vector3d& c = map.coefficients;
+  log->metadata["rotor_signal"] = "speed";
+  log->metadata["command_to_speed"] = "Omega = " + std::to_string(c[0]) + " + " + std::to_string(c[1]) + " u + " +
+                                      std::to_string(c[2]) + " u^2 (vehicle file)";
+}
+
 FlightLog LoadFlightLog(const std::string& path, const Vehicle& vehicle, const FlightSourceOptions& options) {
+  FlightLog log = LoadFlightLogAsRecorded(path, vehicle, options);
+  if (vehicle.command_to_speed && RotorSignalIsCommand(log)) ApplyCommandToSpeed(*vehicle.command_to_speed, &log);
+  return log;
+}
+
+FlightLog LoadFlightLogAsRecorded(const std::string& path, const Vehicle& vehicle, const FlightSourceOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   switch (DetectLogFormat(path)) {
     case LogFormat::kCsv:

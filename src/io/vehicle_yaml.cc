@@ -43,6 +43,16 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
     r.spin = static_cast<int>(spin_value);
     vehicle.rotors.push_back(r);
   }
+  if (const YAML::Node map = root["command_to_speed"]) {
+    if (!map.IsSequence() || map.size() != 3)
+      internal::FailAt(source, map, "command_to_speed must be [c0, c1, c2]: Omega = c0 + c1 u + c2 u^2 (rad/s)");
+    CommandToSpeed command_to_speed;
+    for (int k = 0; k < 3; ++k)
+      command_to_speed.coefficients[k] = internal::ReadYamlNumber(source, map[k], "command_to_speed");
+    if (const std::string problem = command_to_speed.Validate(); !problem.empty())
+      internal::FailAt(source, map, problem);
+    vehicle.command_to_speed = command_to_speed;
+  }
   if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error(source + ": " + problem);
   return vehicle;
 }
@@ -58,6 +68,10 @@ std::string VehicleToYaml(const Vehicle& vehicle) {
   for (const Rotor& r : vehicle.rotors) {
     out << "  - {position: [" << r.position_m.x() << ", " << r.position_m.y() << ", " << r.position_m.z()
         << "], spin: " << (r.spin > 0 ? "+1" : "-1") << "}\n";
+  }
+  if (vehicle.command_to_speed) {
+    const Eigen::Vector3d& c = vehicle.command_to_speed->coefficients;
+    out << "command_to_speed: [" << c[0] << ", " << c[1] << ", " << c[2] << "]  # Omega = c0 + c1 u + c2 u^2 (rad/s)\n";
   }
   return out.str();
 }

@@ -10,7 +10,7 @@ namespace rotorid {
 namespace {
 
 Vehicle PlusQuad(const std::string& name, double mass) {
-  Vehicle v{name, mass, {}};
+  Vehicle v{name, mass, {}, {}};
   const double d = 0.225;
   v.rotors = {{{0, -d, 0}, 1}, {{0, d, 0}, 1}, {{d, 0, 0}, -1}, {{-d, 0, 0}, -1}};
   return v;

@@ -11,21 +11,21 @@ namespace rotorid {
 namespace {
 
 Vehicle PlusQuad() {
-  Vehicle v{"P", 1.285, {}};
+  Vehicle v{"P", 1.285, {}, {}};
   const double d = 0.225;
   v.rotors = {{{0, -d, 0}, 1}, {{0, d, 0}, 1}, {{d, 0, 0}, -1}, {{-d, 0, 0}, -1}};
   return v;
 }
 
 Vehicle XQuad() {
-  Vehicle v{"X", 0.8, {}};
+  Vehicle v{"X", 0.8, {}, {}};
   const double a = 0.16;
   v.rotors = {{{a, -a, 0.01}, 1}, {{-a, -a, 0.01}, -1}, {{-a, a, 0.01}, 1}, {{a, a, 0.01}, -1}};
   return v;
 }
 
 Vehicle Hexa() {
-  Vehicle v{"H", 2.1, {}};
+  Vehicle v{"H", 2.1, {}, {}};
   for (int i = 0; i < 6; ++i) {
     const double angle = M_PI / 6 + i * M_PI / 3;
     v.rotors.push_back({{0.3 * std::cos(angle), 0.3 * std::sin(angle), -0.02}, i % 2 == 0 ? 1 : -1});

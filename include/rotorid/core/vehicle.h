@@ -1,9 +1,9 @@
 #pragma once
 
+#include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace rotorid {
 
@@ -14,11 +14,25 @@ struct Rotor {
   int spin = 1;
 };
 
+// Rotor speed from a logged motor command, for logs without measured speed (docs/input_formats.md):
+//   Omega = c0 + c1 u + c2 u^2 (rad/s, clamped at 0), u the command as the log's rotor columns hold
+//   it (Crazyflie: PWM / 65535; PX4 actuator_motors: 0..1; a mapped CSV: per its column map).
+// Typically fitted to thrust-stand data with a tachometer; the same for every rotor.
+struct CommandToSpeed {
+  Eigen::Vector3d coefficients = Eigen::Vector3d::Zero();
+
+  double operator()(double u) const;
+  // Empty when valid, else what is wrong.
+  std::string Validate() const;
+};
+
 // A vehicle configuration (INTERFACE.md section 3). The mass is the one known parameter.
 struct Vehicle {
   std::string name = "A";
   double mass_kg = 0.0;
   std::vector<Rotor> rotors;
+  // Applied to command logs only (a measured rotor speed is used as it is).
+  std::optional<CommandToSpeed> command_to_speed;
 
   int num_rotors() const { return static_cast<int>(rotors.size()); }
   // Empty when valid, else what is wrong.

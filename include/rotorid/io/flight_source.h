@@ -23,8 +23,17 @@ struct FlightSourceOptions {
 };
 
 LogFormat DetectLogFormat(const std::string& path);
-// Reads any supported log into one flight on one time base. Throws rotorid::Error naming the
-// file and what is wrong.
+
+// Whether the log's rotor columns hold a motor command rather than a measured speed.
+bool RotorSignalIsCommand(const FlightLog& log);
+// Replaces a command log's rotor columns by map(u) (rad/s) and says so in the metadata.
+void ApplyCommandToSpeed(const CommandToSpeed& map, FlightLog* log);
+// Reads any supported log into one flight on one time base. When the rotor signal is a command
+// and the vehicle has a command_to_speed map, the rotor columns become the mapped speed. Throws
+// rotorid::Error naming the file and what is wrong.
 FlightLog LoadFlightLog(const std::string& path, const Vehicle& vehicle, const FlightSourceOptions& options = {});
+// The same without the command_to_speed map: the rotor columns as the log holds them.
+FlightLog LoadFlightLogAsRecorded(const std::string& path, const Vehicle& vehicle,
+                                  const FlightSourceOptions& options = {});
 
 }  // namespace rotorid
