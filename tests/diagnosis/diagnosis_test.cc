@@ -3,27 +3,23 @@
 
 #include "rotorid/diagnosis/diagnosis.h"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "rotorid/core/error.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
+#include "support/test_support.h"
 
 namespace rotorid {
 namespace {
 
 // Configuration B (asymmetric: kd and I_zz identifiable), pixhawk-level noise by default.
 ProcessedFlight SimulatedFlight(double seconds, std::uint64_t seed, const Effects& effects) {
-  const SimulationVehicle vehicle = PresetVehicle("B");
-  SimulationOptions options;
-  options.duration_s = seconds;
-  options.seed = seed;
-  options.effects = effects;
-  const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
+  const SimulationResult sim = testing::SimulatePreset("B", seconds, seed, effects);
   return ProcessFlights({{sim.vehicle, sim.log, 1.0}}, ObservationOptions{}).front();
 }
 

@@ -5,23 +5,10 @@
 #include <algorithm>
 
 #include "rotorid/core/error.h"
-#include "rotorid/sim/presets.h"
-#include "rotorid/sim/simulator.h"
+#include "support/test_support.h"
 
 namespace rotorid {
 namespace {
-
-IdentificationResult IdentifyFlight(const Effects& effects, unsigned seed, double seconds) {
-  const SimulationVehicle v = PresetVehicle("B");
-  SimulationOptions sim;
-  sim.duration_s = seconds;
-  sim.seed = seed;
-  sim.effects = effects;
-  const SimulationResult flight = Simulate(v.vehicle, v.parameters, sim);
-  IdentifyOptions identify;
-  identify.allow_partial = true;
-  return Identify({{flight.vehicle, flight.log, 1.0}}, identify);
-}
 
 // A flight with a delay and a motor lag, ablated over {delay, motor_lag, acc_bias}: every subset is
 // refined, the effect-free one is the TLS fit, and both criteria rank the true pair first; adding
@@ -30,7 +17,7 @@ TEST(AblateTest, InformationCriteriaPickTheInjectedEffects) {
   Effects injected;
   injected.delay_s = 0.015;
   injected.motor_tau_s = 0.03;
-  const IdentificationResult linear = IdentifyFlight(injected, 5, 60.0);
+  const IdentificationResult linear = testing::IdentifySimulated(testing::SimulatePreset("B", 60.0, 5, injected));
   const std::vector<EffectKind> candidates = {EffectKind::kDelay, EffectKind::kMotorLag, EffectKind::kAccBias};
   int progress_calls = 0;
   const AblationResult ablation = Ablate(linear, {}, candidates, RefineOptions{}, 2, [&](int done, int total) {
@@ -69,7 +56,7 @@ TEST(AblateTest, InformationCriteriaPickTheInjectedEffects) {
 }
 
 TEST(AblateTest, RefusesTooManyEffects) {
-  const IdentificationResult linear = IdentifyFlight({}, 2, 10.0);
+  const IdentificationResult linear = testing::IdentifySimulated(testing::SimulatePreset("B", 10.0, 2));
   const std::vector<EffectKind> nine(9, EffectKind::kDelay);
   EXPECT_THROW(Ablate(linear, {}, nine, RefineOptions{}, 1), Error);
 }

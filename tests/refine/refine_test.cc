@@ -1,30 +1,24 @@
 #include "rotorid/refine/refine.h"
 
-#include <cmath>
-
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "refine/idim_residual.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
+#include "support/test_support.h"
 
 namespace rotorid {
 namespace {
 
 IdentificationResult IdentifySimulated(const std::string& preset, double seconds, unsigned seed, const Effects& effects,
                                        SimulationResult* sim_out = nullptr) {
-  const SimulationVehicle v = PresetVehicle(preset);
-  SimulationOptions options;
-  options.duration_s = seconds;
-  options.seed = seed;
-  options.effects = effects;
-  const SimulationResult sim = Simulate(v.vehicle, v.parameters, options);
+  const SimulationResult sim = testing::SimulatePreset(preset, seconds, seed, effects);
   if (sim_out) *sim_out = sim;
-  IdentifyOptions identify;
-  identify.allow_partial = true;
-  return Identify({{sim.vehicle, sim.log, 1.0}}, identify);
+  return testing::IdentifySimulated(sim);
 }
 
 // Every Jacobian of the residual block agrees with numeric differentiation at a generic point
@@ -53,8 +47,8 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
   chi[0] = 1.0;
   double delay = 0.0131, tau = 0.0217;
   Eigen::Vector3d acc_bias(0.12, -0.31, 0.2), gyro_bias(0.01, -0.02, 0.015);
-  Eigen::Vector4d quaternion = Eigen::Quaterniond(Eigen::AngleAxisd(0.04, Eigen::Vector3d(1, -2, 0.5).normalized()))
-                                   .coeffs();
+  Eigen::Vector4d quaternion =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.04, Eigen::Vector3d(1, -2, 0.5).normalized())).coeffs();
   std::vector<double*> parameters = {chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(), quaternion.data()};
   ceres::EigenQuaternionManifold quaternion_manifold;
   std::vector<const ceres::Manifold*> manifolds = {nullptr, nullptr, nullptr, nullptr, nullptr, &quaternion_manifold};
@@ -170,7 +164,8 @@ INSTANTIATE_TEST_SUITE_P(
         RecoveryCase{"acc_bias", Make(0, 0, {0.3, -0.2, 0.4}, kZero, kZero), {EffectKind::kAccBias}},
         RecoveryCase{"gyro_bias", Make(0, 0, kZero, {0.02, -0.015, 0.01}, kZero), {EffectKind::kGyroBias}},
         RecoveryCase{"misalignment", Make(0, 0, kZero, kZero, {2.0, -1.5, 1.0}), {EffectKind::kMisalignment}},
-        RecoveryCase{"delay_and_acc_bias", Make(0.015, 0, {-0.25, 0.3, 0.2}, kZero, kZero),
+        RecoveryCase{"delay_and_acc_bias",
+                     Make(0.015, 0, {-0.25, 0.3, 0.2}, kZero, kZero),
                      {EffectKind::kDelay, EffectKind::kAccBias}}),
     [](const auto& test_info) { return test_info.param.name; });
 

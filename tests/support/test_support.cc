@@ -9,6 +9,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "rotorid/sim/presets.h"
+
 namespace rotorid::testing {
 
 std::string SourceDir() {
@@ -22,6 +24,21 @@ std::optional<std::string> SharedDataPath(const std::string& relative) {
   const std::string path = SharedDir() + "/data/" + relative;
   if (!std::filesystem::exists(path)) return std::nullopt;
   return path;
+}
+
+SimulationResult SimulatePreset(const std::string& preset, double seconds, std::uint64_t seed, const Effects& effects) {
+  const SimulationVehicle vehicle = PresetVehicle(preset);
+  SimulationOptions options;
+  options.duration_s = seconds;
+  options.seed = seed;
+  options.effects = effects;
+  return Simulate(vehicle.vehicle, vehicle.parameters, options);
+}
+
+IdentificationResult IdentifySimulated(const SimulationResult& sim) {
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  return Identify({{sim.vehicle, sim.log, 1.0}}, identify);
 }
 
 std::string MakeTempDir(const std::string& prefix) {

@@ -1,8 +1,13 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "rotorid/ident/identify.h"
+#include "rotorid/model/effects.h"
+#include "rotorid/sim/simulator.h"
 
 namespace rotorid::testing {
 
@@ -11,6 +16,13 @@ std::string SourceDir();
 std::string SharedDir();
 // A path under ../shared/data, or nullopt when that data is absent (tests then GTEST_SKIP()).
 std::optional<std::string> SharedDataPath(const std::string& relative);
+// A simulated flight of a preset vehicle ("A" or "B", MODEL.md section 6) with these effects, at the
+// simulator's default (Pixhawk-level) noise.
+SimulationResult SimulatePreset(const std::string& preset, double seconds, std::uint64_t seed,
+                                const Effects& effects = {});
+// The identification of one simulated flight (roll/pitch inertia allowed to be unidentifiable).
+IdentificationResult IdentifySimulated(const SimulationResult& sim);
+
 // A fresh temporary directory for one test.
 std::string MakeTempDir(const std::string& prefix);
 
