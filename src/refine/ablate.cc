@@ -67,8 +67,7 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
   // Information criteria on the whitened residuals, with the sample count divided by the
   // autocorrelation factor of the fit with every candidate effect (the least misspecified one: the
   // effect-free residual's memory is mostly the missing effects'), so that every subset is charged
-  // alike. The
-  // residuals are whitened by the linear step's weights and metric for every subset
+  // alike. The residuals are whitened by the linear step's weights and metric for every subset
   // (refined_criterion): each refinement's own final cost is not comparable across subsets, since
   // re-running the TLS on effect-corrected rows re-estimates the weights.
   const double rows = static_cast<double>(linear.system.w.rows());
