@@ -1,12 +1,12 @@
 // End-to-end tests through the rotorid binary: simulate -> identify/validate/refine/delay, the
 // JSON keys of INTERFACE.md, and the handling of bad input.
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <fstream>
-#include <sstream>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "support/test_support.h"
 
@@ -16,12 +16,7 @@ namespace {
 using testing::MakeTempDir;
 using testing::RunRotorid;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::Slurp;
 
 nlohmann::json LoadJson(const std::string& path) { return nlohmann::json::parse(Slurp(path)); }
 
@@ -30,9 +25,9 @@ class CliTest : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new std::string(MakeTempDir("rotorid-cli"));
     for (const auto& [name, seed] : {std::pair<std::string, std::string>{"train", "11"}, {"val", "12"}}) {
-      const auto r = RunRotorid({"simulate", "--preset", "B", "--seconds", "40", "--seed", seed, "--out",
-                                 Path(name + ".csv"), "--truth", Path(name + "_truth.json"), "--vehicle-out",
-                                 Path("B.yaml"), "--quiet"});
+      const auto r =
+          RunRotorid({"simulate", "--preset", "B", "--seconds", "40", "--seed", seed, "--out", Path(name + ".csv"),
+                      "--truth", Path(name + "_truth.json"), "--vehicle-out", Path("B.yaml"), "--quiet"});
       ASSERT_EQ(r.exit_code, 0) << r.err;
     }
   }
@@ -53,8 +48,8 @@ TEST_F(CliTest, IdentifyWritesContractKeysAndRecoversTruth) {
   const nlohmann::json report = LoadJson(Path("identify.json"));
   const nlohmann::json truth = LoadJson(Path("train_truth.json"));
   const nlohmann::json& parameters = report["linear"]["parameters"];
-  for (const char* name : {"kt", "kd", "B.ms_x", "B.ms_y", "B.ms_z", "B.I_xx", "B.I_yy", "B.I_zz", "B.I_xy", "B.I_xz",
-                           "B.I_yz"}) {
+  for (const char* name :
+       {"kt", "kd", "B.ms_x", "B.ms_y", "B.ms_z", "B.I_xx", "B.I_yy", "B.I_zz", "B.I_xy", "B.I_xz", "B.I_yz"}) {
     ASSERT_TRUE(parameters.contains(name)) << name;
     for (const char* key : {"value", "std", "rel_std_pct", "essential"}) EXPECT_TRUE(parameters[name].contains(key));
   }
@@ -114,7 +109,8 @@ TEST_F(CliTest, UnexcitedFlightIsRefusedWithReason) {
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const auto r = RunRotorid({"identify", "--vehicle", Path("B.yaml"), "--log", Path("hover.csv")});
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_TRUE(r.err.find("not identifiable") != std::string::npos || r.err.find("could not be identified") != std::string::npos)
+  EXPECT_TRUE(r.err.find("not identifiable") != std::string::npos ||
+              r.err.find("could not be identified") != std::string::npos)
       << r.err;
 }
 
@@ -124,7 +120,8 @@ TEST_F(CliTest, AccelerometerBiasIsFlagged) {
                              "acc_bias=0.3,-0.2,0.3", "--out", Path("biased.csv"), "--quiet"});
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const auto r = RunRotorid({"identify", "--vehicle", Path("B.yaml"), "--log", Path("biased.csv")});
-  EXPECT_TRUE(r.err.find("systematic force error") != std::string::npos || r.err.find("scale lost") != std::string::npos)
+  EXPECT_TRUE(r.err.find("systematic force error") != std::string::npos ||
+              r.err.find("scale lost") != std::string::npos)
       << r.err;
 }
 
@@ -164,13 +161,13 @@ INSTANTIATE_TEST_SUITE_P(
     Cases, BadInputTest,
     ::testing::Values(
         BadInput{"empty", "", "empty file"},
-        BadInput{"missing_column", "t,gyro_x,gyro_y,acc_x,acc_y,acc_z,rotor_1,rotor_2,rotor_3,rotor_4\n0,0,0,0,0,9.8,1,1,1,1\n",
+        BadInput{"missing_column",
+                 "t,gyro_x,gyro_y,acc_x,acc_y,acc_z,rotor_1,rotor_2,rotor_3,rotor_4\n0,0,0,0,0,9.8,1,1,1,1\n",
                  "missing required column 'gyro_z'"},
         BadInput{"non_numeric", Rows(50, 0.0, "0.1,abc,0,0,0,0,9.8,900,900,900,900", 20), ":22:"},
         BadInput{"nan", Rows(50, 0.0, "0.1,nan,0,0,0,0,9.8,900,900,900,900", 20), "not a finite number"},
         BadInput{"backwards", Rows(50, 0.0, "0.01,0,0,0,0,0,9.8,900,900,900,900", 30), "time goes backwards"},
-        BadInput{"truncated", Rows(50) + "0.3,0,0", "truncated"},
-        BadInput{"too_few", Rows(5), "too few samples"},
+        BadInput{"truncated", Rows(50) + "0.3,0,0", "truncated"}, BadInput{"too_few", Rows(5), "too few samples"},
         BadInput{"negative_rotor", Rows(50, 0.0, "0.1,0,0,0,0,0,9.8,-900,900,900,900", 20), "negative rotor"}),
     [](const auto& test_info) { return test_info.param.name; });
 

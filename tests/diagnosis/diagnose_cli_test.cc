@@ -1,11 +1,11 @@
 // `rotorid diagnose` end to end: a simulated flight with a withheld delay, the report keys of
 // INTERFACE.md section 5, the verdict on stdout, and errors.
 
-#include <fstream>
-#include <sstream>
-
 #include <gtest/gtest.h>
+
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "support/test_support.h"
 
@@ -15,18 +15,13 @@ namespace {
 using testing::MakeTempDir;
 using testing::RunRotorid;
 
-nlohmann::json LoadJson(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return nlohmann::json::parse(s.str());
-}
+nlohmann::json LoadJson(const std::string& path) { return nlohmann::json::parse(testing::Slurp(path)); }
 
 TEST(DiagnoseCliTest, WithheldDelayThroughTheCommandLine) {
   const std::string dir = MakeTempDir("rotorid-diagnose");
-  const auto sim = RunRotorid({"simulate", "--preset", "B", "--seconds", "40", "--seed", "41", "--effect",
-                               "delay_s=0.025", "--out", dir + "/flight.csv", "--vehicle-out", dir + "/B.yaml",
-                               "--truth", dir + "/truth.json", "--quiet"});
+  const auto sim =
+      RunRotorid({"simulate", "--preset", "B", "--seconds", "40", "--seed", "41", "--effect", "delay_s=0.025", "--out",
+                  dir + "/flight.csv", "--vehicle-out", dir + "/B.yaml", "--truth", dir + "/truth.json", "--quiet"});
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const auto r = RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--folds", "3",
                              "--json", dir + "/diagnosis.json"});
@@ -75,8 +70,8 @@ TEST(DiagnoseCliTest, BadCandidateAndMissingLogFail) {
   const auto sim = RunRotorid({"simulate", "--preset", "B", "--seconds", "10", "--seed", "42", "--out",
                                dir + "/flight.csv", "--vehicle-out", dir + "/B.yaml", "--quiet"});
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const auto bad_effect = RunRotorid(
-      {"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--effects", "delay,wobble"});
+  const auto bad_effect =
+      RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--effects", "delay,wobble"});
   EXPECT_EQ(bad_effect.exit_code, 1);
   EXPECT_NE(bad_effect.err.find("wobble"), std::string::npos) << bad_effect.err;
   const auto bad_folds =

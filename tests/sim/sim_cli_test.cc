@@ -20,12 +20,7 @@ namespace {
 using testing::MakeTempDir;
 using testing::RunRotorid;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::Slurp;
 
 // Short flights; in Debug (sanitizer) builds also the lightest physics, as the binary is slow there.
 std::vector<std::string> LightFlight() {

@@ -47,14 +47,12 @@ std::string MakeTempDir(const std::string& prefix) {
   return pattern;
 }
 
-namespace {
 std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
 }
-}  // namespace
 
 CommandResult RunRotorid(const std::vector<std::string>& args) {
   const char* binary = std::getenv("ROTORID_BINARY");

@@ -23,6 +23,9 @@ SimulationResult SimulatePreset(const std::string& preset, double seconds, std::
 // The identification of one simulated flight (roll/pitch inertia allowed to be unidentifiable).
 IdentificationResult IdentifySimulated(const SimulationResult& sim);
 
+// The whole content of a file ("" when it cannot be read).
+std::string Slurp(const std::string& path);
+
 // A fresh temporary directory for one test.
 std::string MakeTempDir(const std::string& prefix);
 
