@@ -242,12 +242,13 @@ double GridShrinkPct(const IdentificationResult& full, const Effects& base, Effe
   }
   const double without = EffectCriterion(full, base);
   if (!(without > 0.0)) return 0.0;
-  double best = without;
-  for (double value : grid) {
+  std::vector<double> criterion(grid.size());
+  ParallelFor(static_cast<int>(grid.size()), options.num_threads, [&](int i) {
     Effects trial = base;
-    trial.Set(kind, Eigen::VectorXd::Constant(1, value));
-    best = std::min(best, EffectCriterion(full, trial));
-  }
+    trial.Set(kind, Eigen::VectorXd::Constant(1, grid[i]));
+    criterion[i] = EffectCriterion(full, trial);
+  });
+  const double best = std::min(without, *std::min_element(criterion.begin(), criterion.end()));
   return 100.0 * (1.0 - best / without);
 }
 
