@@ -757,9 +757,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       note << "selected early, but not significant once " << Join(v.tested_on_top_of) << " were in (held-out shrink "
            << std::setprecision(2) << std::fixed << v.test.shrink_pct << " %): dropped as redundant";
     } else if (v.test.screened && v.test.shrink_pct >= options.screen_fraction * options.min_shrink_pct) {
-      note << "not refined: its predicted in-sample shrink (" << std::setprecision(2) << std::fixed
-           << v.test.shrink_pct << " %) was well below the leading candidate's at step " << v.step
-           << ", where the selection stopped";
+      note << "not refined: its predicted in-sample shrink (" << std::setprecision(2) << std::fixed << v.test.shrink_pct
+           << " %) was well below the leading candidate's at step " << v.step << ", where the selection stopped";
     } else if (v.test.screened) {
       note << "not refined: its first-order in-sample shrink is only " << std::setprecision(2) << std::fixed
            << v.test.shrink_pct << " %; this data would reveal it above "
