@@ -1,6 +1,8 @@
 // Whole-process benchmark of the rotorid CLI: wall time and peak resident memory of each command on
 // simulated logs (a 90 s and a 1 h flight at 200 Hz), measured with wait4(). Each figure is the
-// median of several runs in one session, so ratios between rows are meaningful.
+// median of several runs in one session, so ratios between rows are meaningful. When
+// /usr/bin/python3 has numpy and scipy, the numpy/scipy implementation of the same identify
+// pipeline (bench/identify_reference.py) runs in the same session and the ratio is printed.
 //
 //   cli_bench [runs=5] [--long]   (--long adds the 1 h log: about a minute to simulate)
 
@@ -90,11 +92,24 @@ int main(int argc, char** argv) {
   };
   if (long_log)
     cases.push_back({"identify, 1 h log", {rotorid, "identify", "--vehicle", path("b.yaml"), "--log", path("b3600.csv")}});
+  const std::string python = "/usr/bin/python3";
+  const bool has_reference =
+      Run({python, "-c", "import numpy, scipy, yaml"}).exit_code == 0;
+  if (has_reference)
+    cases.push_back({"numpy/scipy reference identify, 90 s log",
+                     with({python, std::string(ROTORID_SOURCE_DIR) + "/bench/identify_reference.py"}, flight)});
   std::printf("%-44s %10s %10s %6s\n", "command", "median s", "peak MB", "exit");
+  std::vector<Measurement> measured;
   for (const Case& c : cases) {
     const Measurement m = Median(c.args, c.label.find("ablate") != std::string::npos ? std::min(runs, 3) : runs);
+    measured.push_back(m);
     std::printf("%-44s %10.3f %10.1f %6d\n", c.label.c_str(), m.seconds, m.peak_mb, m.exit_code);
     std::fflush(stdout);
   }
+  if (has_reference)
+    std::printf("identify is %.1fx faster than the numpy/scipy reference (same log, same run)\n",
+                measured.back().seconds / measured.front().seconds);
+  else
+    std::printf("no numpy/scipy reference: apt-get install python3-numpy python3-scipy python3-yaml\n");
   return 0;
 }
