@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <string>
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/io/blackbox_segments.h"
 #include "rotorid/io/flight_source.h"
+#include "rotorid/refine/motor_response.h"
 #include "support/test_support.h"
 
 namespace rotorid {
@@ -163,6 +166,65 @@ TEST(BlackboxFlightReal, GeckoIsACommandLogWithBatteryVoltage) {
   FlightSourceOptions rpm;
   rpm.rotor_signal = "rpm";
   EXPECT_THROW(LoadFlightLog(*path, Quad(), rpm), Error);
+}
+
+}  // namespace
+}  // namespace rotorid
+
+namespace rotorid {
+namespace {
+
+// SOURCE.md's phases of the three TU Delft logs: armed idle, the hand throw's free fall, motor
+// stops; the segmentation keeps the excitation right after the launch.
+TEST(BlackboxSegments, ThrowsFreeFallIdleAndMotorStops) {
+  const auto p230 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00230.BFL");
+  const auto p271 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!p230 || !p271) GTEST_SKIP() << "TU Delft logs absent";
+  const auto span_of = [](const std::vector<FlightPhaseSpan>& phases, FlightPhase phase, double t) {
+    for (const FlightPhaseSpan& s : phases)
+      if (s.phase == phase && s.t_begin_s <= t && t <= s.t_end_s) return s;
+    return FlightPhaseSpan{FlightPhase::kPowered, 0, 0, -1.0, -1.0};
+  };
+  const FlightLog thrown = LoadBlackboxFlight(*p230, 4);
+  const auto phases = FlightPhases(thrown, {}, ThrownQuadSegmentationOptions());
+  const FlightPhaseSpan fall = span_of(phases, FlightPhase::kFreeFall, 9.9);
+  EXPECT_NEAR(fall.t_begin_s, 9.68, 0.03) << PhaseReport(phases);  // SOURCE.md: free fall 9.68-10.2
+  EXPECT_NEAR(fall.t_end_s, 10.2, 0.03);
+  EXPECT_NEAR(span_of(phases, FlightPhase::kMotorsStopped, 5.0).t_end_s, 9.68, 0.03);     // until the throw
+  EXPECT_NEAR(span_of(phases, FlightPhase::kMotorsStopped, 25.0).t_begin_s, 24.6, 0.15);  // stop at 24.5
+  const Segmentation kept = SegmentThrownFlight(thrown);
+  ASSERT_EQ(kept.kept.size(), 1u) << kept.Report(thrown);
+  EXPECT_NEAR(thrown.t_s[kept.kept[0].begin], 9.68, 0.05) << kept.Report(thrown);  // not the carrying hand
+  EXPECT_NEAR(thrown.t_s[kept.kept[0].end - 1], 24.5, 0.2);
+
+  const FlightLog launched = LoadBlackboxFlight(*p271, 4);
+  const auto launch_phases = FlightPhases(launched, {}, ThrownQuadSegmentationOptions());
+  EXPECT_NEAR(span_of(launch_phases, FlightPhase::kArmedIdle, 0.3).t_end_s, 0.7, 0.06)
+      << PhaseReport(launch_phases);  // SOURCE.md: armed idle 0-0.65, boost from 0.7
+  const Segmentation launch_kept = SegmentThrownFlight(launched);
+  ASSERT_EQ(launch_kept.kept.size(), 1u);
+  EXPECT_LT(launched.t_s[launch_kept.kept[0].begin], 1.0) << launch_kept.Report(launched);  // excitation 1.4-1.9 kept
+}
+
+// Command (motor[]) to measured speed (omega[]) on the TU Delft logs: Table I's motor time
+// constant is 20 ms (bench) and 25.9-26.6 ms (in-flight fits).
+TEST(BlackboxFlightReal, MotorTimeConstantFromCommandToMeasuredSpeed) {
+  const auto path = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!path) GTEST_SKIP() << "TU Delft logs absent";
+  BlackboxFlightOptions as_command;
+  as_command.rotor_signal = "command";
+  const FlightLog command = LoadBlackboxFlight(*path, 4, as_command);
+  const FlightLog speed = LoadBlackboxFlight(*path, 4);
+  const Segmentation kept = SegmentThrownFlight(speed);
+  const SampleRange r = kept.kept.at(0);
+  const MotorResponse response =
+      EstimateMotorResponse(speed.t_s.segment(r.begin, r.size()), command.rotor_radps.middleRows(r.begin, r.size()),
+                            speed.rotor_radps.middleRows(r.begin, r.size()));
+  std::cout << "LOG00271 motor response: delay " << response.delay_s * 1e3 << " ms, tau " << response.motor_tau_s * 1e3
+            << " ms, explained " << response.explained_pct << " %, map " << response.static_map.transpose() << "\n";
+  EXPECT_GT(response.motor_tau_s, 0.010);
+  EXPECT_LT(response.motor_tau_s, 0.045);
+  EXPECT_GT(response.explained_pct, 90.0);
 }
 
 }  // namespace
