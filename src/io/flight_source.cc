@@ -3,6 +3,8 @@
 #include <fstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/io/blackbox.h"
+#include "rotorid/io/blackbox_flight.h"
 #include "rotorid/io/column_map.h"
 #include "rotorid/io/crazyflie_flight.h"
 #include "rotorid/io/flight_csv.h"
@@ -19,11 +21,12 @@ std::string FlightSourceOptions::Validate() const {
 LogFormat DetectLogFormat(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open");
-  char head[8] = {};
+  char head[256] = {};
   in.read(head, sizeof(head));
   const std::string magic(head, static_cast<size_t>(in.gcount()));
   if (magic.size() >= 7 && magic.compare(0, 4, "ULog") == 0) return LogFormat::kULog;
   if (!magic.empty() && static_cast<unsigned char>(magic[0]) == 0xBC) return LogFormat::kCrazyflieUsd;
+  if (LooksLikeBlackbox(magic)) return LogFormat::kBlackbox;
   return LogFormat::kCsv;
 }
 
@@ -69,6 +72,12 @@ FlightLog LoadFlightLogAsRecorded(const std::string& path, const Vehicle& vehicl
       CrazyflieFlightOptions crazyflie;
       crazyflie.rotor_signal = options.rotor_signal;
       return LoadCrazyflieFlight(path, vehicle.num_rotors(), crazyflie);
+    }
+    case LogFormat::kBlackbox: {
+      // docs/blackbox.md: measured omega[]/eRPM[] when present ("auto"), else motor[] commands.
+      BlackboxFlightOptions blackbox;
+      blackbox.rotor_signal = options.rotor_signal;
+      return LoadBlackboxFlight(path, vehicle.num_rotors(), blackbox);
     }
   }
   return {};

@@ -1,7 +1,7 @@
 #pragma once
 
 // One entry point for every log format rotorid reads: the format is recognised from the file's
-// first bytes (PX4 ULog, Crazyflie micro-SD) and falls back to the CSV of INTERFACE.md.
+// first bytes (PX4 ULog, Crazyflie micro-SD, Betaflight/INAV blackbox) and falls back to the CSV of INTERFACE.md.
 
 #include <string>
 
@@ -10,7 +10,7 @@
 
 namespace rotorid {
 
-enum class LogFormat { kCsv, kULog, kCrazyflieUsd };
+enum class LogFormat { kCsv, kULog, kCrazyflieUsd, kBlackbox };
 
 struct FlightSourceOptions {
   // Which rotor signal to use where a log has several: "auto" (measured speed when present,

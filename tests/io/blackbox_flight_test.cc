@@ -1,0 +1,231 @@
+#include "rotorid/io/blackbox_flight.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "rotorid/core/error.h"
+#include "rotorid/io/blackbox_segments.h"
+#include "rotorid/io/flight_source.h"
+#include "rotorid/refine/motor_response.h"
+#include "support/test_support.h"
+
+namespace rotorid {
+namespace {
+
+Vehicle Quad(double arm_m = 0.1) {
+  BlackboxLog header_only;
+  header_only.main.names = {"motor[0]", "motor[1]", "motor[2]", "motor[3]"};
+  QuadXGeometry geometry;
+  geometry.arm_length_m = arm_m;
+  geometry.mass_kg = 0.3;
+  return SuggestVehicleFromBlackboxHeader(header_only, geometry);
+}
+
+// A decoded log built in memory: one row per frame.
+BlackboxLog MakeLog(const std::vector<std::string>& names, const std::vector<std::vector<std::int64_t>>& rows,
+                    const std::map<std::string, std::string>& header) {
+  BlackboxLog log;
+  log.header = header;
+  log.main.names = names;
+  for (const auto& row : rows) log.main.values.insert(log.main.values.end(), row.begin(), row.end());
+  return log;
+}
+
+TEST(BlackboxFlight, UnitsFromTheHeader) {
+  const std::vector<std::string> names = {"time",         "gyroADC[0]",   "gyroADC[1]",   "gyroADC[2]",
+                                          "accSmooth[0]", "accSmooth[1]", "accSmooth[2]", "motor[0]",
+                                          "motor[1]",     "motor[2]",     "motor[3]",     "eRPM[0]",
+                                          "eRPM[1]",      "eRPM[2]",      "eRPM[3]",      "vbatLatest"};
+  const std::vector<std::vector<std::int64_t>> rows = {
+      {1000, 100, -200, 0, 0, 0, 2048, 48, 2047, 1047, 158, 140, 280, 0, -70, 1650},
+      {3000, 100, -200, 0, 0, 0, 2048, 48, 2047, 1047, 158, 140, 280, 0, -70, 1650},
+      {3000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},  // time does not increase: dropped
+  };
+  const BlackboxLog log = MakeLog(names, rows,
+                                  {{"acc_1G", "2048"},
+                                   {"gyro_scale", "0x3f800000"},
+                                   {"blackbox_high_resolution", "1"},
+                                   {"motor_poles", "14"},
+                                   {"motorOutput", "158,2047"},
+                                   {"motor_pwm_protocol", "7"},
+                                   {"Firmware revision", "Betaflight 4.4.0 (abc) STM32F405"}});
+  const FlightLog speed = BlackboxToFlight(log, "mem");
+  ASSERT_EQ(speed.num_samples(), 2);
+  EXPECT_DOUBLE_EQ(speed.t_s[1], 0.002);
+  EXPECT_NEAR(speed.gyro_radps(0, 0), 10.0 * kDegToRad, 1e-12);  // 100 counts, high resolution: 10 deg/s
+  EXPECT_NEAR(speed.gyro_radps(0, 1), -20.0 * kDegToRad, 1e-12);
+  EXPECT_NEAR(speed.acc_mps2(0, 2), kStandardGravity, 1e-12);
+  // eRPM/100 = 140 with 14 poles: 14000 eRPM / 7 pole pairs = 2000 rev/min.
+  EXPECT_NEAR(speed.rotor_radps(0, 0), 2000.0 * kRpmToRadps, 1e-9);
+  EXPECT_NEAR(speed.rotor_radps(0, 3), 1000.0 * kRpmToRadps, 1e-9);  // |negative| (reversed motor)
+  EXPECT_EQ(speed.metadata.at("rotor_signal"), "speed");
+  ASSERT_TRUE(speed.voltage_v.has_value());
+  EXPECT_NEAR((*speed.voltage_v)[0], 16.5, 1e-12);
+  EXPECT_EQ(speed.metadata.at("blackbox_dropped_frames"), "1 (time not increasing)");
+
+  BlackboxFlightOptions command;
+  command.rotor_signal = "command";
+  const FlightLog u = BlackboxToFlight(log, "mem", 4, command);
+  EXPECT_DOUBLE_EQ(u.rotor_radps(0, 0), 0.0);  // DShot 48: zero throttle
+  EXPECT_DOUBLE_EQ(u.rotor_radps(0, 1), 1.0);
+  EXPECT_DOUBLE_EQ(u.rotor_radps(0, 2), 999.0 / 1999.0);
+  EXPECT_EQ(u.metadata.at("rotor_signal"), "command");
+
+  try {
+    BlackboxToFlight(log, "mem", 6);
+    FAIL() << "six rotors from a four-motor log";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no motor[0..5] fields for 6 rotors (the log has 4)"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(BlackboxVehicle, QuadXInBetaflightOrderOrAClearRequestForGeometry) {
+  const Vehicle v = Quad(0.1);
+  ASSERT_EQ(v.num_rotors(), 4);
+  const double d = 0.1 / std::sqrt(2.0);
+  EXPECT_TRUE(v.rotors[0].position_m.isApprox(Eigen::Vector3d(-d, -d, 0)));  // rear-right
+  EXPECT_TRUE(v.rotors[3].position_m.isApprox(Eigen::Vector3d(d, d, 0)));    // front-left
+  EXPECT_EQ(v.rotors[0].spin, -1);
+  EXPECT_EQ(v.rotors[1].spin, 1);
+  EXPECT_EQ(v.rotors[2].spin, 1);
+  EXPECT_EQ(v.rotors[3].spin, -1);
+  EXPECT_TRUE(v.Validate().empty()) << v.Validate();
+
+  BlackboxLog log;
+  log.main.names = {"motor[0]", "motor[1]", "motor[2]", "motor[3]"};
+  log.header["yaw_motors_reversed"] = "1";
+  QuadXGeometry geometry;
+  geometry.arm_length_m = 0.1;
+  EXPECT_EQ(SuggestVehicleFromBlackboxHeader(log, geometry).rotors[0].spin, 1);
+  try {
+    SuggestVehicleFromBlackboxHeader(log, QuadXGeometry{});
+    FAIL() << "no geometry";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("give the arm length (hub to centre, m) and the mass (kg)"), std::string::npos)
+        << e.what();
+  }
+  log.main.names.pop_back();
+  EXPECT_THROW(SuggestVehicleFromBlackboxHeader(log, geometry), Error);
+}
+
+// Correlation of x and y.
+double Correlation(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    sx += x[i], sy += y[i], sxx += x[i] * x[i], syy += y[i] * y[i], sxy += x[i] * y[i];
+  }
+  return (sxy - sx * sy / n) / std::sqrt((sxx - sx * sx / n) * (syy - sy * sy / n));
+}
+
+// The real TU Delft log through LoadFlightLog: format detected, measured speed, FLU axes (roll
+// acceleration follows left-minus-right thrust, pitch acceleration rear-minus-front) during the
+// single-motor excitation 1.4-1.9 s (SOURCE.md).
+TEST(BlackboxFlightReal, IndiflightThrowIsFluWithMeasuredSpeed) {
+  const auto path = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!path) GTEST_SKIP() << "TU Delft logs absent";
+  EXPECT_EQ(DetectLogFormat(*path), LogFormat::kBlackbox);
+  const FlightLog log = LoadFlightLog(*path, Quad());
+  EXPECT_EQ(log.num_samples(), 4192);
+  EXPECT_NEAR(log.duration_s(), 8.314, 0.001);
+  EXPECT_NEAR(1.0 / log.MedianDt(), 504.0, 2.0);
+  EXPECT_EQ(log.metadata.at("rotor_signal"), "speed");
+  EXPECT_NEAR(log.acc_mps2.topRows(200).col(2).mean(), kStandardGravity, 0.3);  // armed idle, at rest
+  std::vector<double> roll_acc, pitch_acc, left_right, rear_front;
+  for (int k = 1; k + 1 < log.num_samples(); ++k) {
+    if (log.t_s[k] < 1.4 || log.t_s[k] > 1.9) continue;
+    const double dt = log.t_s[k + 1] - log.t_s[k - 1];
+    roll_acc.push_back((log.gyro_radps(k + 1, 0) - log.gyro_radps(k - 1, 0)) / dt);
+    pitch_acc.push_back((log.gyro_radps(k + 1, 1) - log.gyro_radps(k - 1, 1)) / dt);
+    const auto w2 = [&](int i) { return log.rotor_radps(k, i) * log.rotor_radps(k, i); };
+    left_right.push_back(w2(2) + w2(3) - w2(0) - w2(1));
+    rear_front.push_back(w2(0) + w2(2) - w2(1) - w2(3));
+  }
+  EXPECT_GT(Correlation(roll_acc, left_right), 0.5);
+  EXPECT_GT(Correlation(pitch_acc, rear_front), 0.5);
+  EXPECT_FALSE(log.voltage_v.has_value());  // fields_disabled_mask drops the battery
+}
+
+TEST(BlackboxFlightReal, GeckoIsACommandLogWithBatteryVoltage) {
+  const auto path = testing::SharedDataPath("real/betaflight-fcblackbox-gecko/raw/btfl_002.bbl");
+  if (!path) GTEST_SKIP() << "Gecko log absent";
+  const FlightLog log = LoadFlightLog(*path, Quad());
+  EXPECT_EQ(log.num_samples(), 66640);
+  EXPECT_NEAR(log.duration_s(), 133.84, 0.01);
+  EXPECT_EQ(log.metadata.at("rotor_signal"), "command");
+  EXPECT_GE(log.rotor_radps.minCoeff(), 0.0);
+  EXPECT_LE(log.rotor_radps.maxCoeff(), 1.0);
+  ASSERT_TRUE(log.voltage_v.has_value());
+  EXPECT_NEAR(log.voltage_v->head(100).mean(), 16.5, 0.2);
+  EXPECT_NEAR(log.voltage_v->minCoeff(), 13.2, 0.3);
+  FlightSourceOptions rpm;
+  rpm.rotor_signal = "rpm";
+  EXPECT_THROW(LoadFlightLog(*path, Quad(), rpm), Error);
+}
+
+}  // namespace
+}  // namespace rotorid
+
+namespace rotorid {
+namespace {
+
+// SOURCE.md's phases of the three TU Delft logs: armed idle, the hand throw's free fall, motor
+// stops; the segmentation keeps the excitation right after the launch.
+TEST(BlackboxSegments, ThrowsFreeFallIdleAndMotorStops) {
+  const auto p230 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00230.BFL");
+  const auto p271 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!p230 || !p271) GTEST_SKIP() << "TU Delft logs absent";
+  const auto span_of = [](const std::vector<FlightPhaseSpan>& phases, FlightPhase phase, double t) {
+    for (const FlightPhaseSpan& s : phases)
+      if (s.phase == phase && s.t_begin_s <= t && t <= s.t_end_s) return s;
+    return FlightPhaseSpan{FlightPhase::kPowered, 0, 0, -1.0, -1.0};
+  };
+  const FlightLog thrown = LoadBlackboxFlight(*p230, 4);
+  const auto phases = FlightPhases(thrown, {}, ThrownQuadSegmentationOptions());
+  const FlightPhaseSpan fall = span_of(phases, FlightPhase::kFreeFall, 9.9);
+  EXPECT_NEAR(fall.t_begin_s, 9.68, 0.03) << PhaseReport(phases);  // SOURCE.md: free fall 9.68-10.2
+  EXPECT_NEAR(fall.t_end_s, 10.2, 0.03);
+  EXPECT_NEAR(span_of(phases, FlightPhase::kMotorsStopped, 5.0).t_end_s, 9.68, 0.03);     // until the throw
+  EXPECT_NEAR(span_of(phases, FlightPhase::kMotorsStopped, 25.0).t_begin_s, 24.6, 0.15);  // stop at 24.5
+  const Segmentation kept = SegmentThrownFlight(thrown);
+  ASSERT_EQ(kept.kept.size(), 1u) << kept.Report(thrown);
+  EXPECT_NEAR(thrown.t_s[kept.kept[0].begin], 9.68, 0.05) << kept.Report(thrown);  // not the carrying hand
+  EXPECT_NEAR(thrown.t_s[kept.kept[0].end - 1], 24.5, 0.2);
+
+  const FlightLog launched = LoadBlackboxFlight(*p271, 4);
+  const auto launch_phases = FlightPhases(launched, {}, ThrownQuadSegmentationOptions());
+  EXPECT_NEAR(span_of(launch_phases, FlightPhase::kArmedIdle, 0.3).t_end_s, 0.7, 0.06)
+      << PhaseReport(launch_phases);  // SOURCE.md: armed idle 0-0.65, boost from 0.7
+  const Segmentation launch_kept = SegmentThrownFlight(launched);
+  ASSERT_EQ(launch_kept.kept.size(), 1u);
+  EXPECT_LT(launched.t_s[launch_kept.kept[0].begin], 1.0) << launch_kept.Report(launched);  // excitation 1.4-1.9 kept
+}
+
+// Command (motor[]) to measured speed (omega[]) on the TU Delft logs: Table I's motor time
+// constant is 20 ms (bench) and 25.9-26.6 ms (in-flight fits).
+TEST(BlackboxFlightReal, MotorTimeConstantFromCommandToMeasuredSpeed) {
+  const auto path = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!path) GTEST_SKIP() << "TU Delft logs absent";
+  BlackboxFlightOptions as_command;
+  as_command.rotor_signal = "command";
+  const FlightLog command = LoadBlackboxFlight(*path, 4, as_command);
+  const FlightLog speed = LoadBlackboxFlight(*path, 4);
+  const Segmentation kept = SegmentThrownFlight(speed);
+  const SampleRange r = kept.kept.at(0);
+  const MotorResponse response =
+      EstimateMotorResponse(speed.t_s.segment(r.begin, r.size()), command.rotor_radps.middleRows(r.begin, r.size()),
+                            speed.rotor_radps.middleRows(r.begin, r.size()));
+  std::cout << "LOG00271 motor response: delay " << response.delay_s * 1e3 << " ms, tau " << response.motor_tau_s * 1e3
+            << " ms, explained " << response.explained_pct << " %, map " << response.static_map.transpose() << "\n";
+  EXPECT_GT(response.motor_tau_s, 0.010);
+  EXPECT_LT(response.motor_tau_s, 0.045);
+  EXPECT_GT(response.explained_pct, 90.0);
+}
+
+}  // namespace
+}  // namespace rotorid
