@@ -348,20 +348,87 @@ FigureSpec DiagnosisFigure(const std::string& name, const std::vector<GapSeries>
     int i = 0;
     for (const RankedEffect& r : ranking) {
       if (!r.shrink_pct) continue;
-      // Significant effects green, the rest grey: "lc rgb variable" reads the colour as an integer.
-      f.data += std::to_string(i++) + " " + Token(r.effect) + " " + Num(*r.shrink_pct) + " " +
-                std::to_string(r.significant ? 0x2ca02c : 0xb0b0b0) + "\n";
+      // Selected effects green, confounded orange, the rest grey: "lc rgb variable" reads an integer.
+      const int colour = r.status == "selected" ? 0x2ca02c : r.status == "confounded" ? 0xff7f0e : 0xb0b0b0;
+      f.data +=
+          std::to_string(i++) + " " + Token(r.effect) + " " + Num(*r.shrink_pct) + " " + std::to_string(colour) + "\n";
     }
     f.data += "\n\n";
     body += "set style data boxes\nset style fill solid 0.85 noborder\nset boxwidth 0.6\nset autoscale y\n";
     body += "set xrange [-0.6:" + std::to_string(i) + "-0.4]\nset xtics rotate by -30 nomirror\n";
-    body += "set title 'Effects ranked: held-out gap removed (%); green = significant' font ',11'\n";
+    body += "set title 'Held-out gap removed by each effect (%): green selected, orange confounded' font ',11'\n";
     body += "set ylabel 'shrink (%)'\nunset key\n";
     body += "set arrow 2 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#555555'\n";
     body += "plot $DATA index " + std::to_string(block) + " using 1:3:4:xtic(2) with boxes lc rgb variable notitle, " +
             "$DATA index " + std::to_string(block) +
             " using 1:3:(sprintf('%.1f', $3)) with labels offset 0, char 0.7 font ',9' notitle\n";
   }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec BandFigure(const std::string& name, const std::vector<BandBars>& bands) {
+  FigureSpec f;
+  f.name = name;
+  f.width_px = 1150;
+  f.height_px = 380;
+  const int components[] = {2, 3, 4, 5};
+  std::string& body = f.body;
+  body += MultiplotGrid(f, 1, 4, "", 75, 20, 70, 40, 75, 0);
+  body += HistogramStyle() + "set xtics rotate by -30 font ',10'\nset key top right font ',9'\nset format y '%.2g'\n";
+  for (int p = 0; p < 4; ++p) {
+    const int c = components[p];
+    for (const BandBars& b : bands)
+      f.data += Token(b.label) + " " + Num(c < static_cast<int>(b.before.size()) ? b.before[c] : std::nullopt) + " " +
+                Num(c < static_cast<int>(b.after.size()) ? b.after[c] : std::nullopt) + "\n";
+    f.data += "\n\n";
+    body += "set title " + GnuplotString(std::string(kWrenchComponentNames[c]) + " residual (" + Unit(c) + " RMS)") +
+            " font ',11'\n";
+    body += std::string(p == 0 ? "set ylabel 'residual RMS'\n" : "unset ylabel\n") + (p == 0 ? "" : "unset key\n");
+    body += "plot $DATA index " + std::to_string(p) + " using 2:xtic(1) lc rgb '" + kRigidBodyColour +
+            "' title 'linear', $DATA index " + std::to_string(p) + " using 3 lc rgb '#9ecae1' title 'with effects'\n";
+  }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec SignatureFigure(const std::string& name, const std::vector<SignatureBars>& signatures) {
+  FigureSpec f;
+  f.name = name;
+  size_t labels = 0;
+  for (const SignatureBars& s : signatures) labels += s.correlation.size();
+  f.width_px = std::max(1000, 480 + 38 * static_cast<int>(labels));
+  f.height_px = 420;
+  // Left: one bar per effect; right: one bar per parameter, in its effect's colour.
+  for (size_t e = 0; e < signatures.size(); ++e)
+    f.data += std::to_string(e) + " " + Token(signatures[e].effect) + " " + Num(signatures[e].linearized_shrink_pct) +
+              " " + std::to_string(std::stoi(std::string(Colour(e)).substr(1), nullptr, 16)) + "\n";
+  f.data += "\n\n";
+  int i = 0;
+  for (size_t e = 0; e < signatures.size(); ++e)
+    for (const auto& [label, correlation] : signatures[e].correlation)
+      f.data += std::to_string(i++) + " " + Token(label) + " " + Num(correlation) + " " +
+                std::to_string(std::stoi(std::string(Colour(e)).substr(1), nullptr, 16)) + "\n";
+  f.data += "\n\n";
+  std::string& body = f.body;
+  body += "set multiplot\n";
+  body += "set style data boxes\nset style fill solid 0.85 noborder\nset boxwidth 0.6\nunset key\n";
+  body += "set xtics rotate by -35 nomirror font ',10'\nset ytics nomirror\n";
+  const double split = 360.0 / f.width_px;
+  body += "set lmargin at screen " + Num(70.0 / f.width_px) + "\nset rmargin at screen " + Num(split - 0.02) +
+          "\nset bmargin at screen " + Num(95.0 / f.height_px) + "\nset tmargin at screen " +
+          Num(1.0 - 40.0 / f.height_px) + "\n";
+  body += "set title 'In-sample shrink of a first-order fit (%)' font ',11'\nset yrange [0:*]\n";
+  body += "set xrange [-0.6:" + std::to_string(signatures.size()) + "-0.4]\n";
+  body +=
+      "plot $DATA index 0 using 1:3:4:xtic(2) with boxes lc rgb variable, $DATA index 0 using 1:3:(sprintf('%.1f', "
+      "$3)) with labels offset 0, char 0.7 font ',9'\n";
+  body +=
+      "set lmargin at screen " + Num(split + 0.05) + "\nset rmargin at screen " + Num(1.0 - 20.0 / f.width_px) + "\n";
+  body += "set title 'Correlation of the residual with each parameter signature' font ',11'\nset yrange [-1:1]\n";
+  body += "set xrange [-0.6:" + std::to_string(std::max(i, 1)) + "-0.4]\n";
+  body += "set arrow 1 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#555555'\n";
+  body += "plot $DATA index 1 using 1:3:4:xtic(2) with boxes lc rgb variable\n";
   body += "unset multiplot\n";
   return f;
 }
