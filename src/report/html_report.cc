@@ -38,6 +38,9 @@ using nlohmann::json;
 
 namespace {
 
+// The figures the last report written into a folder produced, one file name a line.
+constexpr const char* kFigureManifest = ".rotorid_report_figures";
+
 // The components with a rotor wrench (Table III's columns).
 const std::vector<int> kRotorComponents = {2, 3, 4, 5};
 
@@ -218,6 +221,7 @@ class ReportBuilder {
   std::string AblationSection() const;
   std::string SettingsSection() const;
 
+  void RemoveStaleFigures(const std::set<std::string>& written) const;
   void Warn(const std::string& message) { warnings_.push_back(message); }
   std::vector<size_t> FlightsOfGroup(bool held_out) const;
 
@@ -873,6 +877,26 @@ std::string ReportBuilder::Page() const {
   return html;
 }
 
+// Figures an earlier report wrote into this folder would be mistaken for this run's: the ones the
+// folder's manifest lists (this writer's own, never anything else) and this run did not write again
+// are removed, and the manifest then lists this run's.
+void ReportBuilder::RemoveStaleFigures(const std::set<std::string>& written) const {
+  const std::filesystem::path manifest = std::filesystem::path(dir_) / kFigureManifest;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(manifest, ec)) {
+    std::istringstream lines(ReadFile(manifest.string()));
+    for (std::string name; std::getline(lines, name);) {
+      const std::filesystem::path file = std::filesystem::path(dir_) / name;
+      const bool ours = name.rfind("fig_", 0) == 0 && name.find('/') == std::string::npos &&
+                        std::filesystem::path(name).extension() == ".svg";
+      if (ours && !written.count(name) && std::filesystem::is_regular_file(file, ec)) std::filesystem::remove(file, ec);
+    }
+  }
+  std::string list;
+  for (const std::string& name : written) list += name + "\n";
+  WriteFileAtomically(manifest.string(), list);
+}
+
 ReportSummary ReportBuilder::Build() {
   for (const ReportFlight& f : input_.flights)
     if (!f.flight) throw Error("report: flight '" + f.label + "' has no data (null ProcessedFlight)");
@@ -893,6 +917,8 @@ ReportSummary ReportBuilder::Build() {
   CollectMarks();
   RenderFigures(gnuplot_path_.empty() ? std::vector<FigureSpec>() : FigureSpecs());
 
+  // Composed before any file is written: a report JSON without a key its writer emits fails here.
+  const std::string page = Page();
   ReportSummary summary;
   std::set<std::string> written;
   for (const RenderedFigure& f : figures_) {
@@ -902,15 +928,10 @@ ReportSummary ReportBuilder::Build() {
     summary.figure_paths.push_back(path);
     written.insert(f.spec.name + ".svg");
   }
-  // Figures of an earlier report in this folder would be mistaken for this run's.
-  for (const auto& entry : std::filesystem::directory_iterator(dir_, ec)) {
-    const std::string file = entry.path().filename().string();
-    if (file.rfind("fig_", 0) == 0 && entry.path().extension() == ".svg" && !written.count(file))
-      std::filesystem::remove(entry.path(), ec);
-  }
+  RemoveStaleFigures(written);
   summary.figures_drawn = !gnuplot_path_.empty() && summary.figure_paths.size() == figures_.size();
   summary.html_path = (std::filesystem::path(dir_) / "report.html").string();
-  WriteFileAtomically(summary.html_path, Page());
+  WriteFileAtomically(summary.html_path, page);
   summary.warnings = warnings_;
   if (options_.print_warnings)
     for (const std::string& w : warnings_) std::cerr << "rotorid: report: " << w << "\n";

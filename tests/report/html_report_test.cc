@@ -494,6 +494,33 @@ TEST_F(HtmlReportTest, WithoutGnuplotTheTablesAreStillWrittenAndTheReasonGiven) 
   EXPECT_EQ(html.find("<svg"), std::string::npos);
 }
 
+TEST_F(HtmlReportTest, RemovesOnlyFiguresAnEarlierReportWroteThere) {
+  if (!GnuplotAvailable()) GTEST_SKIP() << "gnuplot is not installed";
+  // The user's own files, even ones named like figures, survive every run.
+  WriteFileAtomically(dir_ + "/fig_mine.svg", "<svg/>");
+  WriteFileAtomically(dir_ + "/notes.txt", "x");
+  Write(RefineInput());
+  EXPECT_TRUE(fs::exists(dir_ + "/fig_wrench_2.svg"));
+  EXPECT_TRUE(fs::exists(dir_ + "/fig_spectrum_held_out.svg"));
+  // An identify report into the same folder: the refine report's held-out figures are its own
+  // earlier output and go; the user's files stay.
+  Write(IdentifyInput());
+  EXPECT_FALSE(fs::exists(dir_ + "/fig_wrench_2.svg"));
+  EXPECT_FALSE(fs::exists(dir_ + "/fig_spectrum_held_out.svg"));
+  EXPECT_TRUE(fs::exists(dir_ + "/fig_wrench_1.svg"));
+  EXPECT_EQ(ReadFile(dir_ + "/fig_mine.svg"), "<svg/>");
+  EXPECT_EQ(ReadFile(dir_ + "/notes.txt"), "x");
+  // A manifest naming something that is not a figure of ours deletes nothing.
+  fs::create_directories(dir_ + "/sub");
+  WriteFileAtomically(dir_ + "/sub/fig_a.svg", "<svg/>");
+  WriteFileAtomically(dir_ + "/.rotorid_report_figures", "notes.txt\nsub/fig_a.svg\n");
+  options_.gnuplot = "";  // no figures this time
+  Write(IdentifyInput());
+  EXPECT_TRUE(fs::exists(dir_ + "/notes.txt"));
+  EXPECT_TRUE(fs::exists(dir_ + "/sub/fig_a.svg"));
+  EXPECT_TRUE(fs::exists(dir_ + "/fig_mine.svg"));
+}
+
 TEST_F(HtmlReportTest, EscapesTextAndCreatesTheFolder) {
   ReportInput input = IdentifyInput();
   input.title = "odd <report> & 'quotes'";

@@ -84,8 +84,9 @@ struct ReportSummary {
   std::vector<std::string> warnings;      // the report's own problems (not the analysis's)
 };
 
-// Writes DIR/report.html and DIR/fig_*.svg (each atomically), creating DIR when missing; figure
-// files of an earlier report in DIR that this one does not produce are removed. Throws
+// Writes DIR/report.html and DIR/fig_*.svg (each atomically), creating DIR when missing. Figures
+// an earlier report wrote into DIR (listed in DIR/.rotorid_report_figures) that this one does not
+// produce are removed; no other file is ever deleted. Throws
 // rotorid::Error on invalid input (null flight, invalid options, a report JSON without a key its
 // writer emits) or when DIR cannot be written; gnuplot failures are warnings, not errors.
 ReportSummary WriteHtmlReport(const std::string& dir, const ReportInput& input, const ReportOptions& options = {});
