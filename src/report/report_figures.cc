@@ -241,32 +241,64 @@ FigureSpec SpectrumFigure(const std::string& name, const std::string& group_labe
   return f;
 }
 
+double ParameterAxisHalfWidth(const std::vector<ParameterPoint>& points) {
+  // Deviations from the reference (1) of the other sets' ratios and of every error bar's end.
+  std::vector<double> deviations;
+  for (const ParameterPoint& p : points) {
+    const double reference = p.value.empty() || !p.value[0] ? NAN : *p.value[0];
+    for (size_t k = 0; k < p.value.size(); ++k) {
+      if (k > 0 && p.value[k]) deviations.push_back(std::abs(*p.value[k] / reference - 1.0));
+      if (k < p.std.size() && p.std[k]) deviations.push_back(3.0 * *p.std[k] / std::abs(reference));
+    }
+  }
+  deviations.erase(std::remove_if(deviations.begin(), deviations.end(), [](double d) { return !std::isfinite(d); }),
+                   deviations.end());
+  if (deviations.empty()) return 0.05;
+  std::sort(deviations.begin(), deviations.end());
+  // The axis holds the bulk (up to 4x the upper quartile); a few far points are marked at its edge
+  // instead of squashing the others.
+  const double upper_quartile = deviations[(3 * (deviations.size() - 1)) / 4];
+  const double cap = 4.0 * std::max(upper_quartile, 0.01);
+  return std::max(0.02, std::min(deviations.back(), cap)) * 1.15;
+}
+
 FigureSpec ParameterFigure(const std::string& name, const std::vector<std::string>& set_labels,
                            const std::vector<ParameterPoint>& points) {
   FigureSpec f;
   f.name = name;
-  f.width_px = std::max(700, 140 + 60 * static_cast<int>(points.size()));
+  f.width_px = std::max(760, 140 + 60 * static_cast<int>(points.size()));
   f.height_px = 480;
   const size_t sets = set_labels.size();
+  const double half_width = ParameterAxisHalfWidth(points);
+  const double low = 1.0 - half_width, high = 1.0 + half_width;
+  int outliers = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const ParameterPoint& p = points[i];
     const double reference = p.value.empty() || !p.value[0] ? NAN : *p.value[0];
     f.data += std::to_string(i) + " " + Token(p.name);
     for (size_t k = 0; k < sets; ++k) {
-      // NaN stands for "absent": gnuplot skips the point (value) or draws no bar (std).
-      const double v = k < p.value.size() ? p.value[k].value_or(NAN) : NAN;
-      const double s = k < p.std.size() ? p.std[k].value_or(0.0) : 0.0;
-      f.data += " " + Num(v / reference) + " " + Num(3.0 * s / std::abs(reference));
+      // Per set: ratio, 3 std, and for a ratio beyond the axis its marker at the edge (y, point
+      // type: 9 up, 11 down) and its value; NaN stands for "absent" and draws nothing.
+      const double ratio = k < p.value.size() && p.value[k] ? *p.value[k] / reference : NAN;
+      const double err = k < p.std.size() && p.std[k] ? 3.0 * *p.std[k] / std::abs(reference) : 0.0;
+      const bool outside = std::isfinite(ratio) && (ratio < low || ratio > high);
+      outliers += outside;
+      const double edge = ratio > high ? high - 0.03 * half_width : low + 0.03 * half_width;
+      f.data += " " + Num(outside ? NAN : ratio) + " " + Num(err) + " " + Num(outside ? edge : NAN) + " " +
+                (ratio > high ? "9" : "11") + " " +
+                Token(outside ? Fixed(ratio, std::abs(ratio) < 10 ? 2 : 0) + "x" : "");
     }
     f.data += "\n";
   }
   std::string& body = f.body;
-  body += "set title 'Parameter estimates +- 3 std, divided by the " +
-          (sets ? GnuplotString(set_labels[0]).substr(1, GnuplotString(set_labels[0]).size() - 2) : std::string()) +
-          " estimate' font ',12'\n";
+  const std::string reference_label =
+      sets ? GnuplotString(set_labels[0]).substr(1, GnuplotString(set_labels[0]).size() - 2) : std::string();
+  body += "set title 'Parameter estimates +- 3 std, divided by the " + reference_label + " estimate" +
+          (outliers ? "; triangles: beyond the axis, with their ratio" : "") + "' font ',12'\n";
   body += "set lmargin 12\nset bmargin 5\n";
   body += "set xtics rotate by -40 nomirror font ',10'\nset ytics nomirror\n";
   body += "set xrange [-0.7:" + Num(static_cast<double>(points.size()) - 0.3) + "]\n";
+  body += "set yrange [" + Num(low) + ":" + Num(high) + "]\n";
   body += "set ylabel 'estimate / reference'\nset key top right\n";
   body += "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 3 lc rgb '#888888'\n";
   if (points.empty()) {
@@ -276,10 +308,15 @@ FigureSpec ParameterFigure(const std::string& name, const std::vector<std::strin
   body += "plot ";
   for (size_t k = 0; k < sets; ++k) {
     const double offset = sets > 1 ? -0.15 + 0.3 * static_cast<double>(k) / static_cast<double>(sets - 1) : 0.0;
-    const int value_column = 3 + 2 * static_cast<int>(k);
-    body += std::string(k ? ", " : "") + "$DATA using ($1+(" + Num(offset) + ")):" + std::to_string(value_column) +
-            ":" + std::to_string(value_column + 1) + (k == 0 ? ":xtic(2)" : "") +
-            " with yerrorbars pt 7 ps 0.7 lw 1.3 lc rgb '" + Colour(k) + "' title " + GnuplotString(set_labels[k]);
+    const int c = 3 + 5 * static_cast<int>(k);
+    const std::string x = "($1+(" + Num(offset) + "))";
+    body += std::string(k ? ", " : "") + "$DATA using " + x + ":" + std::to_string(c) + ":" + std::to_string(c + 1) +
+            (k == 0 ? ":xtic(2)" : "") + " with yerrorbars pt 7 ps 0.7 lw 1.3 lc rgb '" + Colour(k) + "' title " +
+            GnuplotString(set_labels[k]);
+    body += ", $DATA using " + x + ":" + std::to_string(c + 2) + ":" + std::to_string(c + 3) +
+            " with points pt variable ps 1.4 lc rgb '" + Colour(k) + "' notitle";
+    body += ", $DATA using " + x + ":" + std::to_string(c + 2) + ":" + std::to_string(c + 4) +
+            " with labels left offset 1.2,0 font ',9' tc rgb '" + Colour(k) + "' notitle";
   }
   body += "\n";
   return f;

@@ -68,8 +68,11 @@ struct ParameterPoint {
   std::vector<std::optional<double>> value;  // per set
   std::vector<std::optional<double>> std;    // per set
 };
+// The y axis is 1 +- ParameterAxisHalfWidth(points): it holds the bulk of the ratios and error bars;
+// a ratio beyond it is drawn as a triangle at the axis' edge, labelled with its value ("33x").
 FigureSpec ParameterFigure(const std::string& name, const std::vector<std::string>& set_labels,
                            const std::vector<ParameterPoint>& points);
+double ParameterAxisHalfWidth(const std::vector<ParameterPoint>& points);
 
 // Figure (d1): the diagnosis: gap per component (bars per stage), and the ranking of effects.
 struct GapSeries {
