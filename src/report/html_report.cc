@@ -8,10 +8,14 @@
 #include <iostream>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <utility>
 
+#include "report/diagnosis_section.h"
 #include "report/gnuplot.h"
+#include "report/html_text.h"
 #include "report/report_figures.h"
+#include "report/report_reader.h"
 #include "report/spectrum.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/atomic_file.h"
@@ -21,144 +25,24 @@
 
 namespace rotorid {
 
+using internal::ComponentCells;
+using internal::ComponentHeader;
 using internal::FigureSpec;
+using internal::Format;
+using internal::General;
+using internal::Html;
+using internal::JsonNode;
+using internal::Pct;
+using internal::Sci;
 using nlohmann::json;
 
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// Tolerant JSON readers: the reports of refine, diagnose and ablate evolve; what is absent or of
-// an unexpected type is simply not shown.
+// The figures the last report written into a folder produced, one file name a line.
+constexpr const char* kFigureManifest = ".rotorid_report_figures";
 
-const json* At(const json& j, const std::string& key) {
-  if (!j.is_object()) return nullptr;
-  const auto it = j.find(key);
-  return it == j.end() || it->is_null() ? nullptr : &*it;
-}
-
-const json* At(const json& j, std::initializer_list<const char*> path) {
-  const json* node = &j;
-  for (const char* key : path) {
-    node = At(*node, key);
-    if (!node) return nullptr;
-  }
-  return node;
-}
-
-// A number, or the "value" of a {"value": ...} object.
-std::optional<double> AsNumber(const json* j) {
-  if (!j) return std::nullopt;
-  if (j->is_number()) return j->get<double>();
-  if (j->is_object()) return AsNumber(At(*j, "value"));
-  return std::nullopt;
-}
-
-// {"Fx": .., ..., "Mz": ..} as 6 optional values; empty when `j` is not such an object.
-std::vector<std::optional<double>> Components(const json* j) {
-  if (!j || !j->is_object()) return {};
-  std::vector<std::optional<double>> out(kNumWrenchComponents);
-  bool any_key = false;
-  for (int c = 0; c < kNumWrenchComponents; ++c) {
-    if (j->contains(kWrenchComponentNames[c])) any_key = true;
-    out[c] = AsNumber(At(*j, kWrenchComponentNames[c]));
-  }
-  return any_key ? out : std::vector<std::optional<double>>();
-}
-
-std::string Str(const json& j) {
-  if (j.is_string()) return j.get<std::string>();
-  return j.dump();
-}
-
-// ---------------------------------------------------------------------------------------------
-// HTML text.
-
-std::string Html(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-std::string Format(const char* format, double v) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof(buffer), format, v);
-  return buffer;
-}
-
-// Parameter values: 4 significant digits in scientific notation, as the paper's tables.
-std::string Sci(std::optional<double> v) { return v && std::isfinite(*v) ? Format("%.4e", *v) : "&ndash;"; }
-std::string Pct(std::optional<double> v, int digits = 2) {
-  if (!v || !std::isfinite(*v)) return "&ndash;";
-  return Format(digits == 1 ? "%.1f" : "%.2f", *v);
-}
-std::string General(double v) { return std::isfinite(v) ? Format("%.4g", v) : "&ndash;"; }
-
-// A value or a vector of values, each with its std: "0.0102 &plusmn; 0.0003".
-std::string ValueWithStd(const json* value, const json* std_value) {
-  auto one = [](const json* v) -> std::optional<double> {
-    return v && v->is_number() ? std::optional(v->get<double>()) : std::nullopt;
-  };
-  if (!value) return "&ndash;";
-  if (value->is_array()) {
-    std::string out = "[";
-    for (size_t k = 0; k < value->size(); ++k) {
-      const json* s = std_value && std_value->is_array() && k < std_value->size() ? &(*std_value)[k] : nullptr;
-      out += (k ? ", " : "") + ValueWithStd(&(*value)[k], s);
-    }
-    return out + "]";
-  }
-  const std::optional<double> v = one(value), s = one(std_value);
-  if (!v) return Html(Str(*value));
-  return General(*v) + (s ? " &plusmn; " + General(*s) : "");
-}
-
-// {"value": .., "std": ..}, or {"name": {"value", "std"}, ...}, or anything else dumped.
-std::string Magnitude(const json* m) {
-  if (!m) return "&ndash;";
-  if (m->is_object() && m->contains("value")) return ValueWithStd(At(*m, "value"), At(*m, "std"));
-  if (m->is_object()) {
-    std::string out;
-    for (const auto& [key, entry] : m->items())
-      out += (out.empty() ? "" : "; ") + Html(key) + " = " +
-             (entry.is_object() ? ValueWithStd(At(entry, "value"), At(entry, "std")) : ValueWithStd(&entry, nullptr));
-    return out;
-  }
-  return ValueWithStd(m, nullptr);
-}
-
-std::string ComponentHeader(const std::vector<int>& components) {
-  std::string out;
-  for (const int c : components) out += "<th class=\"num\">" + std::string(kWrenchComponentNames[c]) + "</th>";
-  return out;
-}
-
-std::string ComponentCells(const std::vector<std::optional<double>>& values, const std::vector<int>& components) {
-  std::string out;
-  for (const int c : components)
-    out += "<td class=\"num\">" + Pct(c < static_cast<int>(values.size()) ? values[c] : std::nullopt) + "</td>";
-  return out;
-}
+// The components with a rotor wrench (Table III's columns).
+const std::vector<int> kRotorComponents = {2, 3, 4, 5};
 
 // kt, kd first, then each configuration's parameters in MODEL.md's order, then anything else.
 bool ParameterLess(const std::string& a, const std::string& b) {
@@ -175,7 +59,8 @@ bool ParameterLess(const std::string& a, const std::string& b) {
   return key(a) < key(b);
 }
 
-// Dotted keys of every scalar (or array of scalars) below `j`.
+// Dotted keys of every scalar (or array of scalars) below `j`: the run settings are shown as they
+// were recorded, whatever options a command adds.
 void Flatten(const json& j, const std::string& prefix, std::vector<std::pair<std::string, std::string>>* out) {
   if (j.is_object()) {
     for (const auto& [key, value] : j.items()) Flatten(value, prefix.empty() ? key : prefix + "." + key, out);
@@ -184,37 +69,29 @@ void Flatten(const json& j, const std::string& prefix, std::vector<std::pair<std
   }
 }
 
-// A generic table for an array of flat objects (the union of their keys as columns).
-std::string ObjectArrayTable(const json& array) {
-  std::vector<std::string> keys;
-  for (const json& row : array)
-    if (row.is_object())
-      for (const auto& [key, value] : row.items())
-        if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
-  if (keys.empty()) return "<p>" + Html(array.dump()) + "</p>\n";
-  std::string html = "<table><thead><tr>";
-  for (const std::string& key : keys) html += "<th>" + Html(key) + "</th>";
-  html += "</tr></thead><tbody>\n";
-  for (const json& row : array) {
-    html += "<tr>";
-    for (const std::string& key : keys) {
-      const json* v = At(row, key);
-      if (v && v->is_number()) {
-        html += "<td class=\"num\">" + General(v->get<double>()) + "</td>";
-      } else if (const std::vector<std::optional<double>> c = Components(v); !c.empty()) {
-        // Per-component values in one cell: "Fz 1.2 · Mx 3.4", undefined ones left out.
-        std::string cell;
-        for (int j = 0; j < kNumWrenchComponents; ++j)
-          if (c[j])
-            cell += (cell.empty() ? "" : " &middot; ") + std::string(kWrenchComponentNames[j]) + " " + General(*c[j]);
-        html += "<td class=\"small\">" + (cell.empty() ? std::string("&ndash;") : cell) + "</td>";
-      } else {
-        html += "<td>" + (v ? Html(Str(*v)) : std::string("&ndash;")) + "</td>";
-      }
-    }
-    html += "</tr>\n";
+// One cell of the input.flights[] table: numbers with 4 digits, lists joined, an object or a list of
+// objects (segments) one line per entry.
+std::string InputCell(const json& v) {
+  if (v.is_number()) return General(v.get<double>());
+  if (v.is_string()) return Html(v.get<std::string>());
+  if (v.is_boolean()) return v.get<bool>() ? "yes" : "no";
+  if (v.is_null()) return "&ndash;";
+  std::string out;
+  if (v.is_object()) {
+    for (const auto& [key, value] : v.items())
+      out += (out.empty() ? "" : "<br/>") + Html(key) + ": " + InputCell(value);
+    return out;
   }
-  return html + "</tbody></table>\n";
+  const bool lines = std::any_of(v.begin(), v.end(), [](const json& e) { return e.is_object(); });
+  for (const json& e : v) {
+    std::string entry;
+    if (e.is_object())
+      for (const auto& item : e.items()) entry += (entry.empty() ? "" : ", ") + InputCell(item.value());
+    else
+      entry = InputCell(e);
+    out += (out.empty() ? "" : lines ? "<br/>" : ", ") + entry;
+  }
+  return out.empty() ? "&ndash;" : out;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -284,6 +161,14 @@ td.no { color: var(--muted); }
 .tag.held { background: #efe7f7; color: #5b2f86; }
 .tag.yes { background: #e3f3e6; color: #22662f; }
 .tag.nope { background: #eee; color: #777; }
+.tag.warn { background: #fff0d9; color: #8a5300; }
+.tag.bad { background: #fdecea; color: #a12a26; }
+.verdict { padding: 12px 16px; border-left: 4px solid var(--accent); background: #eef3fa; margin: 10px 0 16px;
+           border-radius: 3px; }
+.verdict pre { margin: 6px 0 0; white-space: pre-wrap; font: 13.5px/1.5 ui-monospace, SFMono-Regular, Menlo, Consolas,
+               monospace; }
+tr.total td { font-weight: 600; }
+.scroll { overflow-x: auto; }
 .box { padding: 10px 14px; border-left: 4px solid var(--warn-line); background: var(--warn-bg); margin: 10px 0;
        border-radius: 3px; }
 .box.bad { border-color: var(--bad-line); background: var(--bad-bg); }
@@ -304,7 +189,8 @@ class ReportBuilder {
       : dir_(dir),
         input_(input),
         options_(options),
-        report_(input.report.is_object() ? input.report : json::object()) {}
+        report_(input.report.is_object() ? input.report : json::object()),
+        root_(report_, "") {}
 
   ReportSummary Build();
 
@@ -312,23 +198,30 @@ class ReportBuilder {
   // Data.
   void ComputeSplits();
   void CollectParameterBlocks();
+  std::optional<JsonNode> ParameterBlockJson(const std::string& label) const;
   void CollectMarks();
   // Figures.
   std::vector<FigureSpec> FigureSpecs();
+  std::optional<FigureSpec> ParameterFigureSpec() const;
+  static std::string AblationLabel(const JsonNode& entry);
   void RenderFigures(std::vector<FigureSpec> specs);
   // Page.
   std::string Page() const;
   std::string FlightsSection() const;
   std::string WarningsSection() const;
   std::string ParametersSection() const;
+  std::string EffectsTable() const;
   std::string RelativeErrorSection() const;
   std::string FigureHtml(const std::string& name) const;
   std::string WrenchSection() const;
   std::string SpectrumSection() const;
-  std::string DiagnosisSection() const;
+  std::string ChecksSection() const;
+  bool AnyCheckNotOk() const;
+  std::string InputFlightsTable() const;
   std::string AblationSection() const;
   std::string SettingsSection() const;
 
+  void RemoveStaleFigures(const std::set<std::string>& written) const;
   void Warn(const std::string& message) { warnings_.push_back(message); }
   std::vector<size_t> FlightsOfGroup(bool held_out) const;
 
@@ -336,6 +229,7 @@ class ReportBuilder {
   const ReportInput& input_;
   const ReportOptions& options_;
   const json report_;
+  const JsonNode root_;  // report_, read strictly
 
   std::string gnuplot_path_;
   // splits_[flight][set]
@@ -343,10 +237,12 @@ class ReportBuilder {
   // Parameter blocks of the table: label and the JSON "parameters" object (may be null).
   struct ParameterBlock {
     std::string label;
-    const json* parameters = nullptr;
+    std::optional<JsonNode> parameters;  // the JSON block's "parameters", when there is one
     const ParameterSet* set = nullptr;
   };
   std::vector<ParameterBlock> blocks_;
+  std::string ParameterCells(const ParameterBlock& b, const std::string& name, std::optional<double>* value,
+                             std::optional<double>* std_value, bool* discarded) const;
   std::vector<std::vector<internal::TimeMark>> marks_;  // per flight
   std::vector<std::pair<double, double>> bands_hz_;
   std::vector<RenderedFigure> figures_;
@@ -375,92 +271,36 @@ void ReportBuilder::ComputeSplits() {
   }
 }
 
-void ReportBuilder::CollectParameterBlocks() {
-  std::set<std::string> seen;
-  for (const ParameterSet& set : input_.parameter_sets) {
-    if (!seen.insert(set.label).second) continue;
-    const json* parameters = At(report_, {set.label.c_str(), "parameters"});
-    blocks_.push_back({set.label, parameters && parameters->is_object() ? parameters : nullptr, &set});
-  }
-  // Blocks of the JSON that no parameter set stands for (e.g. a refine report given to identify).
-  for (const char* label : {"linear", "refined"}) {
-    const json* parameters = At(report_, {label, "parameters"});
-    if (parameters && parameters->is_object() && seen.insert(label).second)
-      blocks_.push_back({label, parameters, nullptr});
-  }
+// The "linear" and "refined" blocks of identify/refine reports; other parameter sets (the
+// diagnosis's) have values only.
+std::optional<JsonNode> ReportBuilder::ParameterBlockJson(const std::string& label) const {
+  if ((label != "linear" && label != "refined") || !root_.Has(label)) return std::nullopt;
+  return root_[label]["parameters"];
 }
 
-// Time stretches ("where" of the diagnosis) to mark on the time axes, and frequency bands to mark
-// on the spectra. Any array of objects under "where" with start/end times counts; a
-// "flight"/"log"/"source" entry picks the flight, else every flight. Bands (low/high frequencies)
-// are marked only from arrays named "worst..." or entries flagged "worst": a plain list of bands
-// partitions the spectrum and would shade all of it.
+void ReportBuilder::CollectParameterBlocks() {
+  std::set<std::string> seen;
+  for (const ParameterSet& set : input_.parameter_sets)
+    if (seen.insert(set.label).second) blocks_.push_back({set.label, ParameterBlockJson(set.label), &set});
+  // Blocks of the JSON that no parameter set stands for (e.g. a refine report given to validate).
+  for (const char* label : {"linear", "refined"})
+    if (const std::optional<JsonNode> parameters = ParameterBlockJson(label); parameters && seen.insert(label).second)
+      blocks_.push_back({label, parameters, nullptr});
+}
+
+// The diagnosis's worst stretches, shaded on the time axes of the flight they name (by its log
+// path), and the band holding most of the residual, shaded on the spectra.
 void ReportBuilder::CollectMarks() {
   marks_.assign(input_.flights.size(), {});
-  const json* where = At(report_, "where");
-  if (!where) return;
-  auto first_number = [](const json& o, std::initializer_list<const char*> keys) -> std::optional<double> {
-    for (const char* key : keys)
-      if (const std::optional<double> v = AsNumber(At(o, key))) return v;
-    return std::nullopt;
-  };
-  auto flight_matches = [&](const json& o, size_t f) {
-    for (const char* key : {"flight", "log", "source", "flight_label"}) {
-      const json* id = At(o, key);
-      if (!id) continue;
-      if (id->is_number_integer()) {
-        // An index counts among the held-out flights when there are any (the diagnosis's data).
-        const std::vector<size_t> held = FlightsOfGroup(true);
-        const std::vector<size_t>& pool = held.empty() ? FlightsOfGroup(false) : held;
-        const int64_t k = id->get<int64_t>();
-        return k >= 0 && static_cast<size_t>(k) < pool.size() && pool[k] == f;
-      }
-      if (id->is_string()) {
-        const std::string name = id->get<std::string>();
-        const ReportFlight& flight = input_.flights[f];
-        const std::string source = flight.flight->source;
-        return name == flight.label || name == source || std::filesystem::path(source).filename() == name ||
-               std::filesystem::path(name).filename() == std::filesystem::path(source).filename();
-      }
-    }
-    return true;
-  };
-  // Walk every array below "where", remembering the key it hangs from.
-  std::vector<std::pair<const json*, std::string>> stack = {{where, "where"}};
-  while (!stack.empty()) {
-    const auto [node, node_key] = stack.back();
-    stack.pop_back();
-    if (node->is_object()) {
-      for (const auto& item : node->items()) stack.emplace_back(&item.value(), item.key());
-      continue;
-    }
-    if (!node->is_array()) continue;
-    const bool worst_list = node_key.find("worst") != std::string::npos;
-    for (const json& o : *node) {
-      if (!o.is_object()) continue;
-      const std::optional<double> start =
-          first_number(o, {"start_s", "t_start_s", "t_start", "start", "begin_s", "from_s"});
-      const std::optional<double> end = first_number(o, {"end_s", "t_end_s", "t_end", "end", "stop_s", "to_s"});
-      if (start && end && *end > *start) {
-        std::string label;
-        for (const char* key : {"label", "phase", "kind", "component"})
-          if (const json* l = At(o, key); l && l->is_string()) label = l->get<std::string>();
-        for (size_t f = 0; f < input_.flights.size(); ++f)
-          if (flight_matches(o, f)) marks_[f].push_back({*start, *end, label});
-      }
-      std::optional<double> low = first_number(o, {"low_hz", "f_low_hz", "from_hz", "min_hz"});
-      std::optional<double> high = first_number(o, {"high_hz", "f_high_hz", "to_hz", "max_hz"});
-      if (const json* band = At(o, "band_hz");
-          band && band->is_array() && band->size() == 2 && (*band)[0].is_number() && (*band)[1].is_number()) {
-        low = (*band)[0].get<double>();
-        high = (*band)[1].get<double>();
-      }
-      const json* worst = At(o, "worst");
-      const bool flagged = worst_list || (worst && worst->is_boolean() && worst->get<bool>());
-      if (flagged && low && high && *high > *low) bands_hz_.emplace_back(*low, *high);
-      stack.emplace_back(&o, node_key);
-    }
+  if (!internal::HasDiagnosis(root_)) return;
+  for (const JsonNode& stretch : root_["where"]["worst_stretches"].Elements()) {
+    const std::string flight = stretch["flight"].String();
+    for (size_t f = 0; f < input_.flights.size(); ++f)
+      if (input_.flights[f].flight->source == flight)
+        marks_[f].push_back(
+            {stretch["start_s"].Number(), stretch["end_s"].Number(), stretch["dominant_component"].String()});
   }
+  bands_hz_ = internal::WorstBands(root_);
 }
 
 std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
@@ -486,7 +326,9 @@ std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
     if (!columns.empty()) specs.push_back(std::move(spec));
   }
   // (b) Residual spectra, identification and held-out flights separately.
-  const std::optional<double> cutoff = AsNumber(At(report_, {"settings", "observation", "filter", "cutoff_hz"}));
+  const std::optional<double> cutoff =
+      root_.Has("settings") ? std::optional(root_["settings"]["observation"]["filter"]["cutoff_hz"].Number())
+                            : std::nullopt;
   for (const bool held_out : {false, true}) {
     const std::vector<size_t> group = FlightsOfGroup(held_out);
     if (group.empty()) continue;
@@ -541,107 +383,64 @@ std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
     specs.push_back(std::move(spec));
   }
   // (c) Parameters with error bars, from the JSON blocks that carry statistics.
+  if (std::optional<FigureSpec> spec = ParameterFigureSpec()) specs.push_back(std::move(*spec));
+  // (d) Diagnosis and ablation, when the report carries them.
+  for (FigureSpec& spec : internal::DiagnosisFigures(root_)) specs.push_back(std::move(spec));
+  if (root_.Has("ablation")) {
+    std::vector<internal::AblationRow> table;
+    for (const JsonNode& entry : root_["ablation"].Elements())
+      table.push_back({AblationLabel(entry), entry["relative_error_pct"].Components(),
+                       entry.Has("held_out_relative_error_pct") ? entry["held_out_relative_error_pct"].Components()
+                                                                : std::vector<std::optional<double>>()});
+    if (!table.empty())
+      specs.push_back(internal::Titled(
+          internal::AblationFigure("fig_ablation", table), "Ablation",
+          "Relative error per component for each combination of effects, on the identification flights "
+          "and, when given, on held-out flights. An effect earns its place when it lowers the held-out "
+          "bars, not only the identification ones."));
+  }
+  return specs;
+}
+
+std::optional<FigureSpec> ReportBuilder::ParameterFigureSpec() const {
   std::vector<std::string> labels;
-  std::vector<const json*> parameter_objects;
+  std::vector<JsonNode> parameter_objects;
   for (const ParameterBlock& b : blocks_)
     if (b.parameters) {
       labels.push_back(b.label);
-      parameter_objects.push_back(b.parameters);
+      parameter_objects.push_back(*b.parameters);
     }
-  if (!parameter_objects.empty()) {
-    std::vector<std::string> names;
-    for (const auto& [name, entry] : parameter_objects[0]->items()) {
-      const json* essential = At(entry, "essential");
-      const std::optional<double> value = AsNumber(&entry);
-      if ((!essential || !essential->is_boolean() || essential->get<bool>()) && value && *value != 0.0)
-        names.push_back(name);
-    }
-    std::sort(names.begin(), names.end(), ParameterLess);
-    std::vector<internal::ParameterPoint> points;
-    for (const std::string& name : names) {
-      internal::ParameterPoint p;
-      p.name = name;
-      for (const json* parameters : parameter_objects) {
-        const json* entry = At(*parameters, name);
-        p.value.push_back(entry ? AsNumber(entry) : std::nullopt);
-        p.std.push_back(entry && entry->is_object() ? AsNumber(At(*entry, "std")) : std::nullopt);
-      }
-      points.push_back(std::move(p));
-    }
-    FigureSpec spec = internal::ParameterFigure("fig_parameters", labels, points);
-    spec.title = "Parameter estimates";
-    spec.caption = "Each essential parameter of the " + labels[0] +
-                   " estimate, divided by that estimate, with error bars of 3 standard deviations; other sets are "
-                   "divided by the same value so that every parameter shares one axis. A refined value outside the "
-                   "linear error bar means the effects changed the estimate by more than its uncertainty.";
-    specs.push_back(std::move(spec));
+  if (parameter_objects.empty()) return std::nullopt;
+  std::vector<std::string> names;
+  for (const auto& [name, entry] : parameter_objects[0].Items()) {
+    const std::optional<double> value = entry["value"].NumberOrNull();
+    if (entry["essential"].Bool() && value && *value != 0.0) names.push_back(name);
   }
-  // (d) Diagnosis and ablation, when the report carries them.
-  {
-    std::vector<internal::GapSeries> gaps;
-    if (auto v = Components(At(report_, {"baseline", "relative_error_pct"})); !v.empty())
-      gaps.push_back({"baseline", v});
-    std::vector<internal::RankedEffect> ranking;
-    if (const json* r = At(report_, "ranking"); r && r->is_array()) {
-      for (const json& entry : *r) {
-        if (!entry.is_object()) continue;
-        internal::RankedEffect effect;
-        effect.effect = At(entry, "effect") ? Str(entry["effect"]) : "?";
-        effect.shrink_pct = AsNumber(At(entry, "shrink_pct"));
-        const json* significant = At(entry, "significant");
-        effect.significant = significant && significant->is_boolean() && significant->get<bool>();
-        ranking.push_back(effect);
-        for (const char* key : {"held_out_relative_error_pct", "relative_error_pct"})
-          if (auto v = Components(At(entry, key)); !v.empty()) {
-            gaps.push_back({"+ " + effect.effect, v});
-            break;
-          }
-      }
+  std::sort(names.begin(), names.end(), ParameterLess);
+  std::vector<internal::ParameterPoint> points;
+  for (const std::string& name : names) {
+    internal::ParameterPoint p;
+    p.name = name;
+    for (const JsonNode& parameters : parameter_objects) {
+      const bool present = parameters.json().contains(name);
+      p.value.push_back(present ? parameters[name]["value"].NumberOrNull() : std::nullopt);
+      p.std.push_back(present ? parameters[name]["std"].NumberOrNull() : std::nullopt);
     }
-    if (auto v = Components(At(report_, {"final", "relative_error_pct"})); !v.empty()) gaps.push_back({"final", v});
-    if (!gaps.empty() || !ranking.empty()) {
-      FigureSpec spec = internal::DiagnosisFigure("fig_diagnosis", gaps, ranking);
-      spec.title = "Diagnosis";
-      spec.caption =
-          "Left: the held-out gap (Table III relative error) per component with the linear model (baseline), with "
-          "each candidate effect when the report gives it, and with the selected effects (final). Right: how much of "
-          "the held-out gap each effect removes; green bars passed the significance test that accounts for the "
-          "parameters the effect adds.";
-      specs.push_back(std::move(spec));
-    }
+    points.push_back(std::move(p));
   }
-  if (const json* ablation = At(report_, "ablation"); ablation) {
-    const json* rows = ablation->is_array() ? ablation : nullptr;
-    if (!rows && ablation->is_object())
-      for (const auto& item : ablation->items())
-        if (item.value().is_array()) rows = &item.value();
-    std::vector<internal::AblationRow> table;
-    if (rows)
-      for (const json& entry : *rows) {
-        if (!entry.is_object()) continue;
-        internal::AblationRow row;
-        const json* effects = At(entry, "effects");
-        if (effects && effects->is_array()) {
-          for (const json& e : *effects) row.label += (row.label.empty() ? "" : "+") + Str(e);
-        } else if (effects) {
-          row.label = Str(*effects);
-        }
-        if (row.label.empty()) row.label = "none";
-        row.identification = Components(At(entry, "relative_error_pct"));
-        row.held_out = Components(At(entry, "held_out_relative_error_pct"));
-        table.push_back(std::move(row));
-      }
-    if (!table.empty()) {
-      FigureSpec spec = internal::AblationFigure("fig_ablation", table);
-      spec.title = "Ablation";
-      spec.caption =
-          "Relative error per component for each combination of effects, on the identification flights "
-          "and, when given, on held-out flights. An effect earns its place when it lowers the held-out "
-          "bars, not only the identification ones.";
-      specs.push_back(std::move(spec));
-    }
-  }
-  return specs;
+  FigureSpec spec = internal::ParameterFigure("fig_parameters", labels, points);
+  spec.title = "Parameter estimates";
+  spec.caption = "Each essential parameter of the " + labels[0] +
+                 " estimate, divided by that estimate, with error bars of 3 standard deviations; other sets are "
+                 "divided by the same value so that every parameter shares one axis. A refined value outside the "
+                 "linear error bar means the effects changed the estimate by more than its uncertainty.";
+  return spec;
+}
+
+std::string ReportBuilder::AblationLabel(const JsonNode& entry) {
+  std::string label;
+  for (const JsonNode& e : entry["effects"].Elements()) label += (label.empty() ? "" : " + ") + e.String();
+  return label.empty() ? "none" : label;
 }
 
 namespace {
@@ -716,20 +515,66 @@ std::string ReportBuilder::FlightsSection() const {
             "</td><td class=\"num\">" + std::to_string(p.num_rows_samples()) + "</td><td class=\"num\">" +
             General(p.weight) + "</td></tr>\n";
   }
-  return html + "</tbody></table>\n";
+  return html + "</tbody></table>\n" + InputFlightsTable();
+}
+
+std::string ReportBuilder::InputFlightsTable() const {
+  if (!root_.Has("input")) return "";
+  const std::vector<JsonNode> flights = root_["input"]["flights"].Elements();
+  // The columns are what the command recorded per log (INTERFACE.md: file, format, span, rates,
+  // rotor signal, columns or topics, segments).
+  std::vector<std::string> keys;
+  for (const JsonNode& f : flights)
+    for (const auto& [key, value] : f.Items())
+      if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+  std::string html = "<h3>What was read</h3>\n<div class=\"scroll\"><table id=\"input_flights\"><thead><tr>";
+  for (const std::string& key : keys) html += "<th>" + Html(key) + "</th>";
+  html += "</tr></thead><tbody>\n";
+  for (const JsonNode& f : flights) {
+    html += "<tr>";
+    for (const std::string& key : keys)
+      html += "<td class=\"small\">" + (f.json().contains(key) ? InputCell(f.json()[key]) : "&ndash;") + "</td>";
+    html += "</tr>\n";
+  }
+  return html + "</tbody></table></div>\n";
+}
+
+std::string ReportBuilder::ChecksSection() const {
+  if (!root_.Has("checks")) return "";
+  std::string rows;
+  int not_ok = 0;
+  for (const JsonNode& check : root_["checks"].Elements()) {
+    const std::string status = check["status"].String();
+    not_ok += status != "ok";
+    const char* cls = status == "ok" ? "yes" : status == "warning" ? "warn" : "bad";
+    rows += "<tr><td><code>" + Html(check["name"].String()) + "</code></td><td><span class=\"tag " + cls + "\">" +
+            Html(status) + "</span></td><td>" + Html(check["message"].String()) + "</td></tr>\n";
+  }
+  const std::string summary = not_ok ? "<div class=\"box bad\">" + std::to_string(not_ok) + " plausibility check" +
+                                           (not_ok > 1 ? "s" : "") +
+                                           " did not pass: read these before the numbers below.</div>\n"
+                                     : "<div class=\"box ok\">Every plausibility check passed.</div>\n";
+  return "<h2 id=\"checks\">Plausibility checks</h2>\n" + summary +
+         "<table id=\"checks_table\"><thead><tr><th>check</th><th>status</th><th>message</th></tr></thead><tbody>\n" +
+         rows + "</tbody></table>\n";
+}
+
+bool ReportBuilder::AnyCheckNotOk() const {
+  if (!root_.Has("checks")) return false;
+  for (const JsonNode& check : root_["checks"].Elements())
+    if (check["status"].String() != "ok") return true;
+  return false;
 }
 
 std::string ReportBuilder::WarningsSection() const {
-  // The analysis's warnings (from the JSON, block by block) and the report's own.
+  // The analysis's warnings, from the blocks whose writers emit them, and the report's own.
   std::vector<std::string> analysis;
-  auto collect = [&](const json* list, const std::string& prefix) {
-    if (!list || !list->is_array()) return;
-    for (const json& w : *list) analysis.push_back(prefix + Str(w));
+  auto collect = [&](const JsonNode& list, const std::string& prefix) {
+    for (const JsonNode& w : list.Elements()) analysis.push_back(prefix + w.String());
   };
-  collect(At(report_, "warnings"), "");
-  if (report_.is_object())
-    for (const auto& [key, value] : report_.items())
-      if (value.is_object()) collect(At(value, "warnings"), key + ": ");
+  if (root_.Has("warnings")) collect(root_["warnings"], "");
+  for (const char* block : {"linear", "refined"})
+    if (root_.Has(block)) collect(root_[block]["warnings"], std::string(block) + ": ");
   std::string html = "<h2 id=\"warnings\">Warnings</h2>\n";
   if (analysis.empty() && warnings_.empty())
     return html + "<div class=\"box ok\">No warnings: the identification reported nothing suspicious.</div>\n";
@@ -746,12 +591,48 @@ std::string ReportBuilder::WarningsSection() const {
   return html;
 }
 
+// The cells of one parameter in one block: value, std, %sigma, essential (with why it was
+// discarded on hover); `value`/`std_value` return what was shown for the change/sigma column.
+std::string ReportBuilder::ParameterCells(const ParameterBlock& b, const std::string& name,
+                                          std::optional<double>* value, std::optional<double>* std_value,
+                                          bool* discarded) const {
+  *value = std::nullopt;
+  *std_value = std::nullopt;
+  *discarded = false;
+  std::optional<double> rel;
+  std::string essential_cell = "&ndash;";
+  if (b.parameters && b.parameters->json().contains(name)) {
+    const JsonNode entry = (*b.parameters)[name];
+    *value = entry["value"].NumberOrNull();
+    *std_value = entry["std"].NumberOrNull();
+    rel = entry["rel_std_pct"].NumberOrNull();
+    *discarded = !entry["essential"].Bool();
+    // What the parameter looked like when it was dropped (only parameters the selection dropped
+    // carry it; fixed ones do not).
+    std::string why;
+    if (entry.Has("estimate_when_discarded"))
+      why = "estimate when discarded: " + Format("%.4g", entry["estimate_when_discarded"].Number());
+    if (entry.Has("most_correlated_with") && !entry["most_correlated_with"].String().empty())
+      why += std::string(why.empty() ? "" : "; ") + "most correlated with " + entry["most_correlated_with"].String() +
+             (entry.Has("correlation") ? " (r = " + Format("%.3f", entry["correlation"].Number()) + ")" : "");
+    essential_cell = *discarded ? "<span class=\"tag nope\"" + (why.empty() ? "" : " title=\"" + Html(why) + "\"") +
+                                      ">discarded</span>"
+                                : "<span class=\"tag yes\">yes</span>";
+  } else if (b.set) {
+    const auto it = b.set->values.find(name);
+    if (it != b.set->values.end()) *value = it->second;
+  }
+  const std::string cls = *discarded ? "num no" : "num";
+  return "<td class=\"" + cls + " sep\">" + Sci(*value) + "</td><td class=\"" + cls + "\">" + Sci(*std_value) +
+         "</td><td class=\"" + cls + "\">" + Pct(rel) + "</td><td>" + essential_cell + "</td>";
+}
+
 std::string ReportBuilder::ParametersSection() const {
   if (blocks_.empty()) return "";
   std::vector<std::string> names;
   for (const ParameterBlock& b : blocks_) {
     if (b.parameters)
-      for (const auto& item : b.parameters->items()) names.push_back(item.key());
+      for (const auto& item : b.parameters->Items()) names.push_back(item.first);
     if (b.set)
       for (const auto& item : b.set->values) names.push_back(item.first);
   }
@@ -762,7 +643,7 @@ std::string ReportBuilder::ParametersSection() const {
       "<em>%&sigma;</em> is the standard deviation in percent of the value (the paper's %&sigma;); a parameter "
       "that is not essential was discarded (held at 0) because the data cannot tell it apart from the others. "
       "<em>change/&sigma;</em> is the difference to the first set in units of the first set's standard "
-      "deviation.</p>\n<table><thead><tr><th rowspan=\"2\">parameter</th>";
+      "deviation.</p>\n<table id=\"parameters_table\"><thead><tr><th rowspan=\"2\">parameter</th>";
   for (size_t k = 0; k < blocks_.size(); ++k)
     html +=
         "<th class=\"group sep\" colspan=\"" + std::string(k ? "5" : "4") + "\">" + Html(blocks_[k].label) + "</th>";
@@ -777,37 +658,9 @@ std::string ReportBuilder::ParametersSection() const {
     html += "<tr><td><code>" + Html(name) + "</code></td>";
     std::optional<double> first_value, first_std;
     for (size_t k = 0; k < blocks_.size(); ++k) {
-      const ParameterBlock& b = blocks_[k];
-      const json* entry = b.parameters ? At(*b.parameters, name) : nullptr;
-      std::optional<double> value = entry ? AsNumber(entry) : std::nullopt;
-      if (!value && b.set) {
-        const auto it = b.set->values.find(name);
-        if (it != b.set->values.end()) value = it->second;
-      }
-      const std::optional<double> std_value = entry && entry->is_object() ? AsNumber(At(*entry, "std")) : std::nullopt;
-      const std::optional<double> rel =
-          entry && entry->is_object() ? AsNumber(At(*entry, "rel_std_pct")) : std::nullopt;
-      const json* essential = entry && entry->is_object() ? At(*entry, "essential") : nullptr;
-      std::string essential_cell = "&ndash;";
+      std::optional<double> value, std_value;
       bool discarded = false;
-      if (essential && essential->is_boolean()) {
-        discarded = !essential->get<bool>();
-        // What the parameter looked like when it was dropped, on hover.
-        std::string why;
-        if (const std::optional<double> estimate = AsNumber(At(*entry, "estimate_when_discarded")))
-          why += "estimate when discarded: " + Format("%.4g", *estimate);
-        if (const json* other = At(*entry, "most_correlated_with"); other && other->is_string() && !other->empty())
-          why += std::string(why.empty() ? "" : "; ") + "most correlated with " + other->get<std::string>() +
-                 (AsNumber(At(*entry, "correlation"))
-                      ? " (r = " + Format("%.3f", *AsNumber(At(*entry, "correlation"))) + ")"
-                      : std::string());
-        essential_cell = discarded ? "<span class=\"tag nope\"" + (why.empty() ? "" : " title=\"" + Html(why) + "\"") +
-                                         ">discarded</span>"
-                                   : "<span class=\"tag yes\">yes</span>";
-      }
-      const std::string cls = discarded ? "num no" : "num";
-      html += "<td class=\"" + cls + " sep\">" + Sci(value) + "</td><td class=\"" + cls + "\">" + Sci(std_value) +
-              "</td><td class=\"" + cls + "\">" + Pct(rel) + "</td><td>" + essential_cell + "</td>";
+      html += ParameterCells(blocks_[k], name, &value, &std_value, &discarded);
       if (k == 0) {
         first_value = value;
         first_std = std_value;
@@ -819,26 +672,30 @@ std::string ReportBuilder::ParametersSection() const {
     }
     html += "</tr>\n";
   }
-  html += "</tbody></table>\n";
-  // Effect parameters of a refined block.
-  for (const ParameterBlock& b : blocks_) {
-    const json* effects = At(report_, {b.label.c_str(), "effects"});
-    if (!effects || !effects->is_object() || effects->empty()) continue;
-    html += "<h3>Unmodelled effects (" + Html(b.label) +
-            ")</h3>\n<table><thead><tr><th>effect parameter</th>"
-            "<th>value &plusmn; std</th></tr></thead><tbody>\n";
-    for (const auto& [key, entry] : effects->items()) {
-      // Effects that were not estimated are held at their initial value: say so rather than "0 +- 0".
-      const json* enabled = At(entry, "enabled");
-      const bool off = enabled && enabled->is_boolean() && !enabled->get<bool>();
-      html += "<tr><td><code>" + Html(key) + "</code></td><td class=\"num" + std::string(off ? " no" : "") + "\">" +
-              (entry.is_object() ? ValueWithStd(At(entry, "value"), off ? nullptr : At(entry, "std"))
-                                 : ValueWithStd(&entry, nullptr)) +
-              (off ? " (not estimated)" : "") + "</td></tr>\n";
-    }
-    html += "</tbody></table>\n";
+  return html + "</tbody></table>\n" + EffectsTable();
+}
+
+// The effect parameters of the refined block, each in its unit.
+std::string ReportBuilder::EffectsTable() const {
+  if (!root_.Has("refined")) return "";
+  std::string rows;
+  for (const auto& [name, entry] : root_["refined"]["effects"].Items()) {
+    // Effects that were not estimated are held at their initial value: say so rather than "0 +- 0".
+    const bool on = entry["enabled"].Bool();
+    const bool on_bound = entry.Has("on_bound") && entry["on_bound"].Bool();
+    rows +=
+        "<tr><td><code>" + Html(name) + "</code></td><td class=\"num" + std::string(on ? "" : " no") + "\">" +
+        internal::ValueWithStd(entry["value"].Numbers(), on ? entry["std"].Numbers() : std::vector<double>(),
+                               internal::EffectParameterUnit(name)) +
+        "</td><td>" +
+        (on ? (on_bound ? "<span class=\"tag warn\">on its bound</span>" : "<span class=\"tag yes\">estimated</span>")
+            : "<span class=\"tag nope\">not estimated</span>") +
+        "</td></tr>\n";
   }
-  return html;
+  if (rows.empty()) return "";
+  return "<h3>Unmodelled effects (refined)</h3>\n<table id=\"effects_table\"><thead><tr><th>effect parameter</th>"
+         "<th class=\"num\">value &plusmn; std</th><th></th></tr></thead><tbody>\n" +
+         rows + "</tbody></table>\n";
 }
 
 std::string ReportBuilder::RelativeErrorSection() const {
@@ -861,18 +718,18 @@ std::string ReportBuilder::RelativeErrorSection() const {
   }
   // All flights together, as the command computed them.
   std::string combined;
-  auto add = [&](const std::string& what, const std::string& set, const json* values) {
-    const std::vector<std::optional<double>> v = Components(values);
-    if (v.empty()) return;
-    combined +=
-        "<tr><td>" + Html(what) + "</td><td>" + Html(set) + "</td>" + ComponentCells(v, {2, 3, 4, 5}) + "</tr>\n";
+  auto add = [&](const std::string& what, const std::string& set, const JsonNode& values) {
+    combined += "<tr><td>" + Html(what) + "</td><td>" + Html(set) + "</td>" +
+                ComponentCells(values.Components(), kRotorComponents) + "</tr>\n";
   };
   for (const char* block : {"linear", "refined"})
-    add("identification flights", block, At(report_, {block, "relative_error_pct"}));
-  for (const char* block : {"linear", "refined"})
-    add("held-out flights", block, At(report_, {"held_out", block, "relative_error_pct"}));
-  add("given flights", At(report_, "params") ? "from " + Str(report_["params"]) : "",
-      At(report_, "relative_error_pct"));
+    if (root_.Has(block)) add("identification flights", block, root_[block]["relative_error_pct"]);
+  if (root_.Has("held_out"))
+    for (const char* block : {"linear", "refined"})
+      add("held-out flights", block, root_["held_out"][block]["relative_error_pct"]);
+  if (root_.Has("params"))  // validate: saved parameters applied to the given flights
+    add("given flights", root_["block"].String() + " parameters of " + root_["params"].String(),
+        root_["relative_error_pct"]);
   if (rows.empty() && combined.empty()) return "";
   std::string html =
       "<h2 id=\"table3\">Relative errors (the paper's Table III)</h2>\n<p>||&rho;<sub>j</sub>|| / "
@@ -882,14 +739,17 @@ std::string ReportBuilder::RelativeErrorSection() const {
       "45&ndash;68 % on Mz. The mean force error is the average of &rho; over the flight: far from zero means a "
       "systematic force error (accelerometer bias, a wrong mass, a misplaced IMU).</p>\n";
   if (!rows.empty())
-    html += "<table><thead><tr><th>flight</th><th>role</th><th>configuration</th><th>parameters</th>" +
-            ComponentHeader({2, 3, 4, 5}) +
-            "<th class=\"num sep\">mean Fx error (N)</th><th class=\"num\">mean Fy (N)</th>"
-            "<th class=\"num\">mean Fz (N)</th></tr></thead><tbody>\n" +
-            rows + "</tbody></table>\n";
+    html +=
+        "<table id=\"table3_flights\"><thead><tr><th>flight</th><th>role</th><th>configuration</th>"
+        "<th>parameters</th>" +
+        ComponentHeader({2, 3, 4, 5}) +
+        "<th class=\"num sep\">mean Fx error (N)</th><th class=\"num\">mean Fy (N)</th>"
+        "<th class=\"num\">mean Fz (N)</th></tr></thead><tbody>\n" +
+        rows + "</tbody></table>\n";
   if (!combined.empty())
     html +=
-        "<h3>All flights together (from the command's report)</h3>\n<table><thead><tr><th>data</th>"
+        "<h3>All flights together (from the command's report)</h3>\n<table id=\"table3_combined\"><thead><tr>"
+        "<th>data</th>"
         "<th>parameters</th>" +
         ComponentHeader({2, 3, 4, 5}) + "</tr></thead><tbody>\n" + combined + "</tbody></table>\n";
   return html;
@@ -926,132 +786,37 @@ std::string ReportBuilder::SpectrumSection() const {
   return "<h2 id=\"spectra\">Residual spectra</h2>\n" + html;
 }
 
-std::string ReportBuilder::DiagnosisSection() const {
-  const json* baseline = At(report_, "baseline");
-  const json* ranking = At(report_, "ranking");
-  const json* final_block = At(report_, "final");
-  const json* where = At(report_, "where");
-  const json* selected = At(report_, "selected");
-  if (!baseline && !ranking && !final_block && !where && !selected) return "";
-  std::string html = "<h2 id=\"diagnosis\">Diagnosis of the sim-to-real gap</h2>\n";
-  if (selected && selected->is_array()) {
-    std::string list;
-    for (const json& s : *selected)
-      list += (list.empty() ? "" : ", ") + Html(Str(s.is_object() && s.contains("effect") ? s["effect"] : s));
-    html += "<p><strong>Selected effects:</strong> " + (list.empty() ? std::string("none") : list) + "</p>\n";
-  }
-  // Gap per component: baseline, per ranked effect when given, final.
-  std::string gap_rows;
-  auto gap_row = [&](const std::string& label, const json* values) {
-    const std::vector<std::optional<double>> v = Components(values);
-    if (!v.empty()) gap_rows += "<tr><td>" + Html(label) + "</td>" + ComponentCells(v, {2, 3, 4, 5}) + "</tr>\n";
-  };
-  gap_row("baseline (linear model)", At(report_, {"baseline", "relative_error_pct"}));
-  if (ranking && ranking->is_array())
-    for (const json& entry : *ranking)
-      if (entry.is_object())
-        gap_row("+ " + (At(entry, "effect") ? Str(entry["effect"]) : std::string("?")),
-                At(entry, "held_out_relative_error_pct") ? At(entry, "held_out_relative_error_pct")
-                                                         : At(entry, "relative_error_pct"));
-  gap_row("final (selected effects)", At(report_, {"final", "relative_error_pct"}));
-  if (!gap_rows.empty())
-    html += "<h3>Held-out gap per component (%)</h3>\n<table><thead><tr><th>model</th>" +
-            ComponentHeader({2, 3, 4, 5}) + "</tr></thead><tbody>\n" + gap_rows + "</tbody></table>\n";
-  if (ranking && ranking->is_array() && !ranking->empty()) {
-    html +=
-        "<h3>Ranking of candidate effects</h3>\n<table><thead><tr><th class=\"num\">#</th><th>effect</th>"
-        "<th>significant</th><th class=\"num\">shrink (%)</th><th>magnitude</th><th>details</th></tr></thead><tbody>\n";
-    int rank = 0;
-    for (const json& entry : *ranking) {
-      if (!entry.is_object()) continue;
-      const json* significant = At(entry, "significant");
-      std::string details;
-      for (const auto& [key, value] : entry.items())
-        if (key != "effect" && key != "significant" && key != "shrink_pct" && key != "magnitude" &&
-            !value.is_object() && !value.is_array())
-          details += (details.empty() ? "" : ", ") + Html(key) + " = " +
-                     (value.is_number() ? General(value.get<double>()) : Html(Str(value)));
-      html +=
-          "<tr><td class=\"num\">" + std::to_string(++rank) + "</td><td><code>" +
-          Html(At(entry, "effect") ? Str(entry["effect"]) : "?") + "</code></td><td>" +
-          (significant && significant->is_boolean() ? (significant->get<bool>() ? "<span class=\"tag yes\">yes</span>"
-                                                                                : "<span class=\"tag nope\">no</span>")
-                                                    : std::string("&ndash;")) +
-          "</td><td class=\"num\">" + Pct(AsNumber(At(entry, "shrink_pct")), 1) + "</td><td>" +
-          Magnitude(At(entry, "magnitude")) + "</td><td class=\"small\">" + details + "</td></tr>\n";
-    }
-    html += "</tbody></table>\n";
-  }
-  if (where) {
-    html += "<h3>Where the gap is</h3>\n";
-    std::vector<std::pair<std::string, std::string>> scalars;
-    std::string tables;
-    if (where->is_object()) {
-      for (const auto& [key, value] : where->items()) {
-        if (value.is_array() && !value.empty() && value[0].is_object())
-          tables += "<p><strong>" + Html(key) + "</strong></p>\n" + ObjectArrayTable(value);
-        else
-          Flatten(value, key, &scalars);
-      }
-    } else {
-      scalars.emplace_back("where", Str(*where));
-    }
-    if (!scalars.empty()) {
-      html += "<table><tbody>\n";
-      for (const auto& [key, value] : scalars)
-        html += "<tr><th>" + Html(key) + "</th><td>" + Html(value) + "</td></tr>\n";
-      html += "</tbody></table>\n";
-    }
-    html += tables;
-  }
-  html += FigureHtml("fig_diagnosis");
-  return html;
-}
-
 std::string ReportBuilder::AblationSection() const {
-  const json* ablation = At(report_, "ablation");
-  if (!ablation) return "";
-  const json* rows = ablation->is_array() ? ablation : nullptr;
-  if (!rows && ablation->is_object())
-    for (const auto& item : ablation->items())
-      if (item.value().is_array()) rows = &item.value();
-  std::string html = "<h2 id=\"ablation\">Ablation</h2>\n";
-  if (!rows) return html + "<p>" + Html(ablation->dump()) + "</p>\n";
+  if (!root_.Has("ablation")) return "";
+  const std::vector<JsonNode> rows = root_["ablation"].Elements();
   bool any_held_out = false;
-  for (const json& entry : *rows) any_held_out = any_held_out || At(entry, "held_out_relative_error_pct");
-  const std::vector<int> comps = {2, 3, 4, 5};
-  html +=
-      "<table><thead><tr><th rowspan=\"2\">effects</th><th class=\"num\" rowspan=\"2\">parameters</th>"
-      "<th class=\"num\" rowspan=\"2\">AIC</th><th class=\"num\" rowspan=\"2\">BIC</th>"
-      "<th class=\"group sep\" colspan=\"4\">identification (%)</th>" +
+  for (const JsonNode& entry : rows) any_held_out = any_held_out || entry.Has("held_out_relative_error_pct");
+  std::string html =
+      "<h2 id=\"ablation\">Ablation</h2>\n<table id=\"ablation_table\"><thead><tr><th rowspan=\"2\">effects</th>"
+      "<th class=\"num\" rowspan=\"2\">parameters</th><th class=\"num\" rowspan=\"2\">AIC</th>"
+      "<th class=\"num\" rowspan=\"2\">BIC</th><th class=\"group sep\" colspan=\"4\">identification (%)</th>" +
       std::string(any_held_out ? "<th class=\"group sep\" colspan=\"4\">held-out (%)</th>" : "") + "</tr><tr>" +
-      ComponentHeader(comps) + (any_held_out ? ComponentHeader(comps) : "") + "</tr></thead><tbody>\n";
-  for (const json& entry : *rows) {
-    if (!entry.is_object()) continue;
-    std::string label;
-    const json* effects = At(entry, "effects");
-    if (effects && effects->is_array())
-      for (const json& e : *effects) label += (label.empty() ? "" : " + ") + Str(e);
-    else if (effects)
-      label = Str(*effects);
-    const std::optional<double> count = AsNumber(At(entry, "num_parameters"));
-    html += "<tr><td>" + (label.empty() ? std::string("none") : Html(label)) + "</td><td class=\"num\">" +
-            (count ? Format("%.0f", *count) : "&ndash;") + "</td><td class=\"num\">" +
-            General(AsNumber(At(entry, "aic")).value_or(NAN)) + "</td><td class=\"num\">" +
-            General(AsNumber(At(entry, "bic")).value_or(NAN)) + "</td>" +
-            ComponentCells(Components(At(entry, "relative_error_pct")), comps) +
-            (any_held_out ? ComponentCells(Components(At(entry, "held_out_relative_error_pct")), comps) : "") +
+      ComponentHeader(kRotorComponents) + (any_held_out ? ComponentHeader(kRotorComponents) : "") +
+      "</tr></thead><tbody>\n";
+  for (const JsonNode& entry : rows)
+    html += "<tr><td>" + Html(AblationLabel(entry)) + "</td><td class=\"num\">" +
+            Format("%.0f", entry["num_parameters"].Number()) + "</td><td class=\"num\">" +
+            General(entry["aic"].Number()) + "</td><td class=\"num\">" + General(entry["bic"].Number()) + "</td>" +
+            ComponentCells(entry["relative_error_pct"].Components(), kRotorComponents) +
+            (entry.Has("held_out_relative_error_pct")
+                 ? ComponentCells(entry["held_out_relative_error_pct"].Components(), kRotorComponents)
+             : any_held_out ? ComponentCells({}, kRotorComponents)
+                            : "") +
             "</tr>\n";
-  }
   html += "</tbody></table>\n";
   return html + FigureHtml("fig_ablation");
 }
 
 std::string ReportBuilder::SettingsSection() const {
   std::vector<std::pair<std::string, std::string>> settings;
-  if (const json* s = At(report_, "settings")) Flatten(*s, "", &settings);
+  if (root_.Has("settings")) Flatten(report_["settings"], "", &settings);
   for (const char* key : {"command", "rotorid_version", "params"})
-    if (const json* v = At(report_, key)) settings.emplace_back(key, Str(*v));
+    if (root_.Has(key)) settings.emplace_back(key, root_[key].String());
   if (settings.empty()) return "";
   std::string html = "<h2 id=\"settings\">Run settings</h2>\n<table><tbody>\n";
   for (const auto& [key, value] : settings)
@@ -1060,10 +825,22 @@ std::string ReportBuilder::SettingsSection() const {
 }
 
 std::string ReportBuilder::Page() const {
-  const std::string sections[] = {
-      FlightsSection(),  WarningsSection(), ParametersSection(),          RelativeErrorSection(),
-      WrenchSection(),   SpectrumSection(), FigureHtml("fig_parameters"), DiagnosisSection(),
-      AblationSection(), SettingsSection()};
+  // A diagnosis is read verdict first; failed plausibility checks come before everything.
+  const bool checks_first = AnyCheckNotOk();
+  const std::string diagnosis =
+      internal::DiagnosisHtml(root_, [this](const std::string& name) { return FigureHtml(name); });
+  const std::string sections[] = {checks_first ? ChecksSection() : "",
+                                  diagnosis,
+                                  FlightsSection(),
+                                  WarningsSection(),
+                                  ParametersSection(),
+                                  RelativeErrorSection(),
+                                  WrenchSection(),
+                                  SpectrumSection(),
+                                  FigureHtml("fig_parameters"),
+                                  AblationSection(),
+                                  checks_first ? "" : ChecksSection(),
+                                  SettingsSection()};
   std::time_t now = std::time(nullptr);
   char stamp[64] = "";
   std::strftime(stamp, sizeof(stamp), "%Y-%m-%d %H:%M:%S %Z", std::localtime(&now));
@@ -1072,12 +849,13 @@ std::string ReportBuilder::Page() const {
       "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"/>\n<title>" +
       Html(input_.title) + "</title>\n<style>" + kCss + "</style>\n</head>\n<body>\n<main>\n";
   html += "<h1>" + Html(input_.title) + "</h1>\n<div class=\"meta\">rotorid";
-  if (const json* v = At(report_, "rotorid_version")) html += " " + Html(Str(*v));
-  if (const json* c = At(report_, "command")) html += " &middot; command <code>" + Html(Str(*c)) + "</code>";
+  if (root_.Has("rotorid_version")) html += " " + Html(root_["rotorid_version"].String());
+  if (root_.Has("command")) html += " &middot; command <code>" + Html(root_["command"].String()) + "</code>";
   html += " &middot; written " + Html(stamp) + "</div>\n<nav>";
   const std::pair<const char*, const char*> links[] = {
-      {"flights", "Flights"},   {"warnings", "Warnings"}, {"parameters", "Parameters"},    {"table3", "Table III"},
-      {"wrench", "Fig. 3/4"},   {"spectra", "Spectra"},   {"fig_parameters", "Estimates"}, {"diagnosis", "Diagnosis"},
+      {"checks", "Checks"},     {"diagnosis", "Diagnosis"},   {"flights", "Flights"},
+      {"warnings", "Warnings"}, {"parameters", "Parameters"}, {"table3", "Table III"},
+      {"wrench", "Fig. 3/4"},   {"spectra", "Spectra"},       {"fig_parameters", "Estimates"},
       {"ablation", "Ablation"}, {"settings", "Settings"}};
   for (const auto& [id, text] : links) {
     const std::string anchor = std::string("id=\"") + id + "\"";
@@ -1097,6 +875,26 @@ std::string ReportBuilder::Page() const {
       "<p class=\"small\">Figures drawn with gnuplot; every figure is also a separate SVG file beside this "
       "report.</p>\n</main>\n</body>\n</html>\n";
   return html;
+}
+
+// Figures an earlier report wrote into this folder would be mistaken for this run's: the ones the
+// folder's manifest lists (this writer's own, never anything else) and this run did not write again
+// are removed, and the manifest then lists this run's.
+void ReportBuilder::RemoveStaleFigures(const std::set<std::string>& written) const {
+  const std::filesystem::path manifest = std::filesystem::path(dir_) / kFigureManifest;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(manifest, ec)) {
+    std::istringstream lines(ReadFile(manifest.string()));
+    for (std::string name; std::getline(lines, name);) {
+      const std::filesystem::path file = std::filesystem::path(dir_) / name;
+      const bool ours = name.rfind("fig_", 0) == 0 && name.find('/') == std::string::npos &&
+                        std::filesystem::path(name).extension() == ".svg";
+      if (ours && !written.count(name) && std::filesystem::is_regular_file(file, ec)) std::filesystem::remove(file, ec);
+    }
+  }
+  std::string list;
+  for (const std::string& name : written) list += name + "\n";
+  WriteFileAtomically(manifest.string(), list);
 }
 
 ReportSummary ReportBuilder::Build() {
@@ -1119,6 +917,8 @@ ReportSummary ReportBuilder::Build() {
   CollectMarks();
   RenderFigures(gnuplot_path_.empty() ? std::vector<FigureSpec>() : FigureSpecs());
 
+  // Composed before any file is written: a report JSON without a key its writer emits fails here.
+  const std::string page = Page();
   ReportSummary summary;
   std::set<std::string> written;
   for (const RenderedFigure& f : figures_) {
@@ -1128,15 +928,10 @@ ReportSummary ReportBuilder::Build() {
     summary.figure_paths.push_back(path);
     written.insert(f.spec.name + ".svg");
   }
-  // Figures of an earlier report in this folder would be mistaken for this run's.
-  for (const auto& entry : std::filesystem::directory_iterator(dir_, ec)) {
-    const std::string file = entry.path().filename().string();
-    if (file.rfind("fig_", 0) == 0 && entry.path().extension() == ".svg" && !written.count(file))
-      std::filesystem::remove(entry.path(), ec);
-  }
+  RemoveStaleFigures(written);
   summary.figures_drawn = !gnuplot_path_.empty() && summary.figure_paths.size() == figures_.size();
   summary.html_path = (std::filesystem::path(dir_) / "report.html").string();
-  WriteFileAtomically(summary.html_path, Page());
+  WriteFileAtomically(summary.html_path, page);
   summary.warnings = warnings_;
   if (options_.print_warnings)
     for (const std::string& w : warnings_) std::cerr << "rotorid: report: " << w << "\n";
@@ -1169,15 +964,14 @@ std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flig
 }
 
 std::vector<ParameterSet> ParameterSetsFromReport(const json& report) {
+  const JsonNode root(report, "");
   std::vector<ParameterSet> sets;
   for (const char* block : {"linear", "refined"}) {
-    const json* parameters = At(report, {block, "parameters"});
-    if (!parameters || !parameters->is_object()) continue;
+    if (!root.Has(block)) continue;
     ParameterSet set;
     set.label = block;
-    for (const auto& [name, entry] : parameters->items())
-      if (const std::optional<double> value = AsNumber(&entry)) set.values[name] = *value;
-    if (set.values.empty()) continue;
+    for (const auto& [name, entry] : root[block]["parameters"].Items())
+      if (const std::optional<double> value = entry["value"].NumberOrNull()) set.values[name] = *value;
     if (std::string(block) == "refined") set.effects = EffectsFromReport(report);
     sets.push_back(std::move(set));
   }

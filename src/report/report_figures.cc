@@ -241,32 +241,64 @@ FigureSpec SpectrumFigure(const std::string& name, const std::string& group_labe
   return f;
 }
 
+double ParameterAxisHalfWidth(const std::vector<ParameterPoint>& points) {
+  // Deviations from the reference (1) of the other sets' ratios and of every error bar's end.
+  std::vector<double> deviations;
+  for (const ParameterPoint& p : points) {
+    const double reference = p.value.empty() || !p.value[0] ? NAN : *p.value[0];
+    for (size_t k = 0; k < p.value.size(); ++k) {
+      if (k > 0 && p.value[k]) deviations.push_back(std::abs(*p.value[k] / reference - 1.0));
+      if (k < p.std.size() && p.std[k]) deviations.push_back(3.0 * *p.std[k] / std::abs(reference));
+    }
+  }
+  deviations.erase(std::remove_if(deviations.begin(), deviations.end(), [](double d) { return !std::isfinite(d); }),
+                   deviations.end());
+  if (deviations.empty()) return 0.05;
+  std::sort(deviations.begin(), deviations.end());
+  // The axis holds the bulk (up to 4x the upper quartile); a few far points are marked at its edge
+  // instead of squashing the others.
+  const double upper_quartile = deviations[(3 * (deviations.size() - 1)) / 4];
+  const double cap = 4.0 * std::max(upper_quartile, 0.01);
+  return std::max(0.02, std::min(deviations.back(), cap)) * 1.15;
+}
+
 FigureSpec ParameterFigure(const std::string& name, const std::vector<std::string>& set_labels,
                            const std::vector<ParameterPoint>& points) {
   FigureSpec f;
   f.name = name;
-  f.width_px = std::max(700, 140 + 60 * static_cast<int>(points.size()));
+  f.width_px = std::max(760, 140 + 60 * static_cast<int>(points.size()));
   f.height_px = 480;
   const size_t sets = set_labels.size();
+  const double half_width = ParameterAxisHalfWidth(points);
+  const double low = 1.0 - half_width, high = 1.0 + half_width;
+  int outliers = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const ParameterPoint& p = points[i];
     const double reference = p.value.empty() || !p.value[0] ? NAN : *p.value[0];
     f.data += std::to_string(i) + " " + Token(p.name);
     for (size_t k = 0; k < sets; ++k) {
-      // NaN stands for "absent": gnuplot skips the point (value) or draws no bar (std).
-      const double v = k < p.value.size() ? p.value[k].value_or(NAN) : NAN;
-      const double s = k < p.std.size() ? p.std[k].value_or(0.0) : 0.0;
-      f.data += " " + Num(v / reference) + " " + Num(3.0 * s / std::abs(reference));
+      // Per set: ratio, 3 std, and for a ratio beyond the axis its marker at the edge (y, point
+      // type: 9 up, 11 down) and its value; NaN stands for "absent" and draws nothing.
+      const double ratio = k < p.value.size() && p.value[k] ? *p.value[k] / reference : NAN;
+      const double err = k < p.std.size() && p.std[k] ? 3.0 * *p.std[k] / std::abs(reference) : 0.0;
+      const bool outside = std::isfinite(ratio) && (ratio < low || ratio > high);
+      outliers += outside;
+      const double edge = ratio > high ? high - 0.03 * half_width : low + 0.03 * half_width;
+      f.data += " " + Num(outside ? NAN : ratio) + " " + Num(err) + " " + Num(outside ? edge : NAN) + " " +
+                (ratio > high ? "9" : "11") + " " +
+                Token(outside ? Fixed(ratio, std::abs(ratio) < 10 ? 2 : 0) + "x" : "");
     }
     f.data += "\n";
   }
   std::string& body = f.body;
-  body += "set title 'Parameter estimates +- 3 std, divided by the " +
-          (sets ? GnuplotString(set_labels[0]).substr(1, GnuplotString(set_labels[0]).size() - 2) : std::string()) +
-          " estimate' font ',12'\n";
+  const std::string reference_label =
+      sets ? GnuplotString(set_labels[0]).substr(1, GnuplotString(set_labels[0]).size() - 2) : std::string();
+  body += "set title 'Parameter estimates +- 3 std, divided by the " + reference_label + " estimate" +
+          (outliers ? "; triangles: beyond the axis, with their ratio" : "") + "' font ',12'\n";
   body += "set lmargin 12\nset bmargin 5\n";
   body += "set xtics rotate by -40 nomirror font ',10'\nset ytics nomirror\n";
   body += "set xrange [-0.7:" + Num(static_cast<double>(points.size()) - 0.3) + "]\n";
+  body += "set yrange [" + Num(low) + ":" + Num(high) + "]\n";
   body += "set ylabel 'estimate / reference'\nset key top right\n";
   body += "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 3 lc rgb '#888888'\n";
   if (points.empty()) {
@@ -276,10 +308,15 @@ FigureSpec ParameterFigure(const std::string& name, const std::vector<std::strin
   body += "plot ";
   for (size_t k = 0; k < sets; ++k) {
     const double offset = sets > 1 ? -0.15 + 0.3 * static_cast<double>(k) / static_cast<double>(sets - 1) : 0.0;
-    const int value_column = 3 + 2 * static_cast<int>(k);
-    body += std::string(k ? ", " : "") + "$DATA using ($1+(" + Num(offset) + ")):" + std::to_string(value_column) +
-            ":" + std::to_string(value_column + 1) + (k == 0 ? ":xtic(2)" : "") +
-            " with yerrorbars pt 7 ps 0.7 lw 1.3 lc rgb '" + Colour(k) + "' title " + GnuplotString(set_labels[k]);
+    const int c = 3 + 5 * static_cast<int>(k);
+    const std::string x = "($1+(" + Num(offset) + "))";
+    body += std::string(k ? ", " : "") + "$DATA using " + x + ":" + std::to_string(c) + ":" + std::to_string(c + 1) +
+            (k == 0 ? ":xtic(2)" : "") + " with yerrorbars pt 7 ps 0.7 lw 1.3 lc rgb '" + Colour(k) + "' title " +
+            GnuplotString(set_labels[k]);
+    body += ", $DATA using " + x + ":" + std::to_string(c + 2) + ":" + std::to_string(c + 3) +
+            " with points pt variable ps 1.4 lc rgb '" + Colour(k) + "' notitle";
+    body += ", $DATA using " + x + ":" + std::to_string(c + 2) + ":" + std::to_string(c + 4) +
+            " with labels left offset 1.2,0 font ',9' tc rgb '" + Colour(k) + "' notitle";
   }
   body += "\n";
   return f;
@@ -348,20 +385,87 @@ FigureSpec DiagnosisFigure(const std::string& name, const std::vector<GapSeries>
     int i = 0;
     for (const RankedEffect& r : ranking) {
       if (!r.shrink_pct) continue;
-      // Significant effects green, the rest grey: "lc rgb variable" reads the colour as an integer.
-      f.data += std::to_string(i++) + " " + Token(r.effect) + " " + Num(*r.shrink_pct) + " " +
-                std::to_string(r.significant ? 0x2ca02c : 0xb0b0b0) + "\n";
+      // Selected effects green, confounded orange, the rest grey: "lc rgb variable" reads an integer.
+      const int colour = r.status == "selected" ? 0x2ca02c : r.status == "confounded" ? 0xff7f0e : 0xb0b0b0;
+      f.data +=
+          std::to_string(i++) + " " + Token(r.effect) + " " + Num(*r.shrink_pct) + " " + std::to_string(colour) + "\n";
     }
     f.data += "\n\n";
     body += "set style data boxes\nset style fill solid 0.85 noborder\nset boxwidth 0.6\nset autoscale y\n";
     body += "set xrange [-0.6:" + std::to_string(i) + "-0.4]\nset xtics rotate by -30 nomirror\n";
-    body += "set title 'Effects ranked: held-out gap removed (%); green = significant' font ',11'\n";
+    body += "set title 'Held-out gap removed by each effect (%): green selected, orange confounded' font ',11'\n";
     body += "set ylabel 'shrink (%)'\nunset key\n";
     body += "set arrow 2 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#555555'\n";
     body += "plot $DATA index " + std::to_string(block) + " using 1:3:4:xtic(2) with boxes lc rgb variable notitle, " +
             "$DATA index " + std::to_string(block) +
             " using 1:3:(sprintf('%.1f', $3)) with labels offset 0, char 0.7 font ',9' notitle\n";
   }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec BandFigure(const std::string& name, const std::vector<BandBars>& bands) {
+  FigureSpec f;
+  f.name = name;
+  f.width_px = 1150;
+  f.height_px = 380;
+  const int components[] = {2, 3, 4, 5};
+  std::string& body = f.body;
+  body += MultiplotGrid(f, 1, 4, "", 75, 20, 70, 40, 75, 0);
+  body += HistogramStyle() + "set xtics rotate by -30 font ',10'\nset key top right font ',9'\nset format y '%.2g'\n";
+  for (int p = 0; p < 4; ++p) {
+    const int c = components[p];
+    for (const BandBars& b : bands)
+      f.data += Token(b.label) + " " + Num(c < static_cast<int>(b.before.size()) ? b.before[c] : std::nullopt) + " " +
+                Num(c < static_cast<int>(b.after.size()) ? b.after[c] : std::nullopt) + "\n";
+    f.data += "\n\n";
+    body += "set title " + GnuplotString(std::string(kWrenchComponentNames[c]) + " residual (" + Unit(c) + " RMS)") +
+            " font ',11'\n";
+    body += std::string(p == 0 ? "set ylabel 'residual RMS'\n" : "unset ylabel\n") + (p == 0 ? "" : "unset key\n");
+    body += "plot $DATA index " + std::to_string(p) + " using 2:xtic(1) lc rgb '" + kRigidBodyColour +
+            "' title 'linear', $DATA index " + std::to_string(p) + " using 3 lc rgb '#9ecae1' title 'with effects'\n";
+  }
+  body += "unset multiplot\n";
+  return f;
+}
+
+FigureSpec SignatureFigure(const std::string& name, const std::vector<SignatureBars>& signatures) {
+  FigureSpec f;
+  f.name = name;
+  size_t labels = 0;
+  for (const SignatureBars& s : signatures) labels += s.correlation.size();
+  f.width_px = std::max(1000, 480 + 38 * static_cast<int>(labels));
+  f.height_px = 420;
+  // Left: one bar per effect; right: one bar per parameter, in its effect's colour.
+  for (size_t e = 0; e < signatures.size(); ++e)
+    f.data += std::to_string(e) + " " + Token(signatures[e].effect) + " " + Num(signatures[e].linearized_shrink_pct) +
+              " " + std::to_string(std::stoi(std::string(Colour(e)).substr(1), nullptr, 16)) + "\n";
+  f.data += "\n\n";
+  int i = 0;
+  for (size_t e = 0; e < signatures.size(); ++e)
+    for (const auto& [label, correlation] : signatures[e].correlation)
+      f.data += std::to_string(i++) + " " + Token(label) + " " + Num(correlation) + " " +
+                std::to_string(std::stoi(std::string(Colour(e)).substr(1), nullptr, 16)) + "\n";
+  f.data += "\n\n";
+  std::string& body = f.body;
+  body += "set multiplot\n";
+  body += "set style data boxes\nset style fill solid 0.85 noborder\nset boxwidth 0.6\nunset key\n";
+  body += "set xtics rotate by -35 nomirror font ',10'\nset ytics nomirror\n";
+  const double split = 360.0 / f.width_px;
+  body += "set lmargin at screen " + Num(70.0 / f.width_px) + "\nset rmargin at screen " + Num(split - 0.02) +
+          "\nset bmargin at screen " + Num(95.0 / f.height_px) + "\nset tmargin at screen " +
+          Num(1.0 - 40.0 / f.height_px) + "\n";
+  body += "set title 'In-sample shrink of a first-order fit (%)' font ',11'\nset yrange [0:*]\n";
+  body += "set xrange [-0.6:" + std::to_string(signatures.size()) + "-0.4]\n";
+  body +=
+      "plot $DATA index 0 using 1:3:4:xtic(2) with boxes lc rgb variable, $DATA index 0 using 1:3:(sprintf('%.1f', "
+      "$3)) with labels offset 0, char 0.7 font ',9'\n";
+  body +=
+      "set lmargin at screen " + Num(split + 0.05) + "\nset rmargin at screen " + Num(1.0 - 20.0 / f.width_px) + "\n";
+  body += "set title 'Correlation of the residual with each parameter signature' font ',11'\nset yrange [-1:1]\n";
+  body += "set xrange [-0.6:" + std::to_string(std::max(i, 1)) + "-0.4]\n";
+  body += "set arrow 1 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#555555'\n";
+  body += "plot $DATA index 1 using 1:3:4:xtic(2) with boxes lc rgb variable\n";
   body += "unset multiplot\n";
   return f;
 }

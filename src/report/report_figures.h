@@ -24,6 +24,13 @@ struct FigureSpec {
   std::string body;  // gnuplot commands; "$DATA" stands for the quoted data file path
 };
 
+// `spec` with its heading and caption set.
+inline FigureSpec Titled(FigureSpec spec, std::string title, std::string caption) {
+  spec.title = std::move(title);
+  spec.caption = std::move(caption);
+  return spec;
+}
+
 // One column of the wrench figure: a parameter set's split on the flight (nullopt: no values).
 struct WrenchColumn {
   std::string label;
@@ -61,8 +68,11 @@ struct ParameterPoint {
   std::vector<std::optional<double>> value;  // per set
   std::vector<std::optional<double>> std;    // per set
 };
+// The y axis is 1 +- ParameterAxisHalfWidth(points): it holds the bulk of the ratios and error bars;
+// a ratio beyond it is drawn as a triangle at the axis' edge, labelled with its value ("33x").
 FigureSpec ParameterFigure(const std::string& name, const std::vector<std::string>& set_labels,
                            const std::vector<ParameterPoint>& points);
+double ParameterAxisHalfWidth(const std::vector<ParameterPoint>& points);
 
 // Figure (d1): the diagnosis: gap per component (bars per stage), and the ranking of effects.
 struct GapSeries {
@@ -72,10 +82,28 @@ struct GapSeries {
 struct RankedEffect {
   std::string effect;
   std::optional<double> shrink_pct;
-  bool significant = false;
+  std::string status;  // "selected", "confounded", "not significant", ...: the bar's colour
 };
 FigureSpec DiagnosisFigure(const std::string& name, const std::vector<GapSeries>& gaps,
                            const std::vector<RankedEffect>& ranking);
+
+// Figure (d3): the residual per frequency band, before and after the selected effects; one panel
+// per component with a rotor wrench (Fz, Mx, My, Mz), each in its unit.
+struct BandBars {
+  std::string label;                          // "1-3 Hz"
+  std::vector<std::optional<double>> before;  // 6, residual RMS
+  std::vector<std::optional<double>> after;   // 6
+};
+FigureSpec BandFigure(const std::string& name, const std::vector<BandBars>& bands);
+
+// Figure (d4): the effect signatures: the in-sample shrink of a first-order fit of each effect, and
+// the residual's correlation with each of its parameters' signatures.
+struct SignatureBars {
+  std::string effect;
+  double linearized_shrink_pct = 0.0;
+  std::vector<std::pair<std::string, double>> correlation;  // parameter label, cosine
+};
+FigureSpec SignatureFigure(const std::string& name, const std::vector<SignatureBars>& signatures);
 
 // Figure (d2): the ablation table: per configuration of effects, the gap per component.
 struct AblationRow {

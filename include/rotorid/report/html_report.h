@@ -7,8 +7,10 @@
 //       the error on a second axis (the paper's Fig. 3/4), one column per parameter set;
 //   (b) residual amplitude spectra per component, one curve per parameter set;
 //   (c) parameter estimates +- 3 std, normalised by the linear value;
-//   (d) the diagnosis (gap per component before/after, ranking) and the ablation table, when the
-//       command's JSON report carries them.
+//   (d) the diagnosis (verdict; which effect, how far the held-out gap shrinks, where the gap is:
+//       tables with units, the gap, per-band and signature charts) and the ablation table, when
+//       the command's JSON report carries them; the plausibility checks and what was read
+//       (checks[], input.flights[]) when present.
 //
 //   ReportInput input;
 //   input.title = "rotorid identify";
@@ -18,7 +20,9 @@
 //   WriteHtmlReport("out/report", input);
 //
 // Figures need gnuplot (Debian: gnuplot-nox). Without it the report still holds every table and
-// says why the figures are missing. The JSON readers are tolerant: what is absent is left out.
+// says why the figures are missing. The report reads exactly the keys the writers emit (LinearJson,
+// RefinedJson, DiagnosisJson and the commands' blocks, docs/report_format.md): a block the command
+// did not write is left out, a missing or mistyped key inside a block is an error naming it.
 
 #include <map>
 #include <nlohmann/json.hpp>
@@ -80,17 +84,19 @@ struct ReportSummary {
   std::vector<std::string> warnings;      // the report's own problems (not the analysis's)
 };
 
-// Writes DIR/report.html and DIR/fig_*.svg (each atomically), creating DIR when missing; figure
-// files of an earlier report in DIR that this one does not produce are removed. Throws
-// rotorid::Error on invalid input (null flight, invalid options) or when DIR cannot be written;
-// gnuplot failures are warnings, not errors.
+// Writes DIR/report.html and DIR/fig_*.svg (each atomically), creating DIR when missing. Figures
+// an earlier report wrote into DIR (listed in DIR/.rotorid_report_figures) that this one does not
+// produce are removed; no other file is ever deleted. Throws
+// rotorid::Error on invalid input (null flight, invalid options, a report JSON without a key its
+// writer emits) or when DIR cannot be written; gnuplot failures are warnings, not errors.
 ReportSummary WriteHtmlReport(const std::string& dir, const ReportInput& input, const ReportOptions& options = {});
 
 // Report flights for processed flights, labelled by their log's file name.
 std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flights, bool held_out);
 
 // The parameter sets a saved identify/refine report holds: "linear" (no effects) and "refined"
-// (with its "refined.effects"), each when present with numeric values.
+// (with its "refined.effects"), each when present. Throws rotorid::Error when a present block
+// lacks "parameters" or a parameter its "value".
 std::vector<ParameterSet> ParameterSetsFromReport(const nlohmann::json& report);
 
 // True when `gnuplot` (a name on PATH or a path) is an executable file.
