@@ -39,14 +39,15 @@ Command AddAblateCommand(CLI::App& root) {
   command.app->add_option("--effects", options->effects, "effects to combine (default all five: 32 subsets)")
       ->capture_default_str();
   command.app->add_option("--threads", options->threads, "subsets refined in parallel")->capture_default_str();
-  command.run = [options]() {
+  command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const std::vector<EffectKind> effects = ParseEffectList(options->effects);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const IdentificationResult linear = Identify(LoadTrainingFlights(options->flights, source), identify);
+    const LoadedFlights training = LoadTrainingFlights(options->flights, source);
+    const LoadedFlights validation = LoadValidationFlights(options->flights, source);
+    const IdentificationResult linear = Identify(training.flights, identify);
     std::vector<ProcessedFlight> held_out;
-    if (!options->flights.validate_log_paths.empty())
-      held_out = ProcessFlights(LoadValidationFlights(options->flights, source), identify.observation);
+    if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, identify.observation);
     const AblationResult ablation = Ablate(linear, held_out, effects, options->refine, options->threads);
 
     nlohmann::json rows = nlohmann::json::array();
@@ -65,15 +66,16 @@ Command AddAblateCommand(CLI::App& root) {
       if (!held_out.empty()) row["held_out_relative_error_pct"] = ComponentsJson(e.held_out_relative_error_pct);
       rows.push_back(row);
     }
-    if (!options->flights.json_path.empty()) {
-      WriteJsonFile(options->flights.json_path, {{"rotorid_version", kRotoridVersion},
-                                                 {"command", "ablate"},
-                                                 {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
-                                                               {"tls", TlsOptionsJson(identify.tls)}}},
-                                                 {"effective_samples", ablation.effective_samples},
-                                                 {"linear", LinearJson(linear)},
-                                                 {"ablation", rows}});
-    }
+    nlohmann::json report = {
+        {"rotorid_version", kRotoridVersion},
+        {"command", "ablate"},
+        {"settings",
+         {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
+        {"effective_samples", ablation.effective_samples},
+        {"linear", LinearJson(linear)},
+        {"ablation", rows}};
+    AddCommonReportSections(*app, training, &validation, &report);
+    if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     if (!options->flights.quiet) {
       std::cout << "rotorid ablate: " << ablation.entries.size() << " subsets of " << options->effects << "\n";
       std::cout << std::left << std::setw(46) << "effects" << std::right << std::setw(4) << "k" << std::setw(11)

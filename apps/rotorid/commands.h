@@ -4,14 +4,16 @@
 // the function that runs it once the command line is parsed. apps/ holds only argument parsing
 // and printing; the work is done by the library.
 
+#include <CLI/CLI.hpp>
 #include <functional>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
-
 #include "rotorid/ident/identify.h"
 #include "rotorid/ident/tls.h"
+#include "rotorid/io/flight_selection.h"
 #include "rotorid/io/flight_source.h"
 
 namespace rotorid::cli {
@@ -29,6 +31,9 @@ struct FlightOptions {
   std::vector<double> weights;
   std::vector<std::string> validate_vehicle_paths;
   std::vector<std::string> validate_log_paths;
+  std::vector<std::string> windows;           // --window START,END, paired in order with --log
+  std::vector<std::string> validate_windows;  // --validate-window, paired with --validate-log
+  std::string segment = "auto";
   std::string json_path;
   std::string report_dir;
   bool quiet = false;
@@ -45,8 +50,8 @@ struct IdentifyCliOptions {
   IdentifyOptions identify;
 };
 
-// Registers --vehicle/--log/--weight (and --validate-vehicle/--validate-log when `held_out`),
-// --json, --report, --quiet, --verbose.
+// Registers --vehicle/--log/--weight/--window (and --validate-vehicle/--validate-log/--validate-window
+// when `held_out`), --segment, --json, --report, --quiet, --verbose.
 void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out);
 // Registers the signal-processing and TLS options.
 void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* options);
@@ -54,12 +59,38 @@ void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* options);
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* options);
 FlightSourceOptions SourceOptions(const IdentifyCliOptions& options);
 
-// Reads the paired flights; throws rotorid::Error naming the file at fault.
-std::vector<FlightData> LoadFlights(const std::vector<std::string>& vehicle_paths,
-                                    const std::vector<std::string>& log_paths, const std::vector<double>& weights,
-                                    const FlightSourceOptions& source);
-std::vector<FlightData> LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
-std::vector<FlightData> LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source);
+// The flights of the command line: each log cut to its --window and segmented (--segment), so one
+// log may give several flights (one per kept stretch, same vehicle and weight).
+struct LoadedFlights {
+  std::vector<FlightData> flights;
+  std::vector<FlightInputSummary> inputs;  // one per log file, in the order given
+};
+// Reads the paired flights and prints a "read:" line per log unless quiet; throws rotorid::Error
+// naming the file at fault (UsageError for unpaired options).
+LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
+LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source);
+
+// Sections every report carries whatever the command: input.flights[] (and
+// input.validate_flights[]), and the --config file's options when one was given. Plausibility
+// checks and other common sections belong here too.
+void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training, const LoadedFlights* held_out,
+                             nlohmann::json* report);
+
+// --config FILE.yaml on a subcommand (apps/rotorid/config.cc), and the file's options for the
+// report (null when no file was given).
+void AddConfigOption(CLI::App* app);
+nlohmann::json ConfigJson(const CLI::App& app);
+
+// A mistake on the command line (exit code 2, INTERFACE.md 4). rotorid::Error thrown while a
+// command still validates its options counts as one too: see MarkOptionsValidated.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// Called once a command has validated its options and starts reading input: rotorid::Error from
+// here on is bad input (exit 1), before it a usage error (exit 2). LoadTrainingFlights calls it.
+void MarkOptionsValidated();
+bool OptionsValidated();
 
 // Human-readable output.
 std::string FormatComponents(const std::vector<std::optional<double>>& values);
@@ -73,5 +104,15 @@ Command AddRefineCommand(CLI::App& root);
 Command AddDelayCommand(CLI::App& root);
 Command AddAblateCommand(CLI::App& root);
 Command AddDiagnoseCommand(CLI::App& root);
+Command AddVehicleCommand(CLI::App& root);
+Command AddExportCommand(CLI::App& root);
+Command AddBatchCommand(CLI::App& root);
+
+// Output-path and effect-list checks at parse time, and --config, on every command.
+void ApplyConventions(const std::vector<Command>& commands);
+// "run 'rotorid SUB --help' for its options", for the subcommand on the command line.
+std::string UsageHint(const CLI::App& root, int argc, char** argv);
+// Non-empty when argv names no known subcommand: what to tell the user.
+std::string UnknownSubcommand(const CLI::App& root, int argc, char** argv);
 
 }  // namespace rotorid::cli

@@ -28,33 +28,33 @@ Command AddDelayCommand(CLI::App& root) {
       ->capture_default_str();
   command.app->add_flag("--with-motor-lag", options->delay.with_motor_lag, "estimate the motor time constant jointly");
   command.app->add_option("--threads", options->delay.num_threads)->capture_default_str();
-  command.run = [options]() {
+  command.run = [options, app = command.app]() {
     IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     // The delay shows in every parameter; a partial linear start is fine here.
     identify.allow_partial = true;
-    const IdentificationResult linear =
-        Identify(LoadTrainingFlights(options->flights, SourceOptions(options->identify)), identify);
+    const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
+    const IdentificationResult linear = Identify(loaded.flights, identify);
     const DelayEstimate estimate = EstimateDelay(linear, options->delay);
-    if (!options->flights.json_path.empty()) {
-      nlohmann::json curve = nlohmann::json::array();
-      for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
-      WriteJsonFile(options->flights.json_path,
-                    {{"rotorid_version", kRotoridVersion},
-                     {"command", "delay"},
-                     {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
-                                   {"tls", TlsOptionsJson(identify.tls)},
-                                   {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
-                                   {"with_motor_lag", options->delay.with_motor_lag}}},
-                     {"delay_s", estimate.delay_s},
-                     {"delay_std_s", estimate.delay_std_s},
-                     {"grid_best_s", estimate.grid_best_s},
-                     {"motor_tau_s", estimate.motor_tau_s},
-                     {"motor_tau_std_s", estimate.motor_tau_std_s},
-                     {"criterion_curve", curve},
-                     {"linear", LinearJson(linear)},
-                     {"refined", RefinedJson(linear, estimate.refined)},
-                     {"warnings", estimate.warnings}});
-    }
+    nlohmann::json curve = nlohmann::json::array();
+    for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
+    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                             {"command", "delay"},
+                             {"settings",
+                              {{"observation", ObservationOptionsJson(identify.observation)},
+                               {"tls", TlsOptionsJson(identify.tls)},
+                               {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
+                               {"with_motor_lag", options->delay.with_motor_lag}}},
+                             {"delay_s", estimate.delay_s},
+                             {"delay_std_s", estimate.delay_std_s},
+                             {"grid_best_s", estimate.grid_best_s},
+                             {"motor_tau_s", estimate.motor_tau_s},
+                             {"motor_tau_std_s", estimate.motor_tau_std_s},
+                             {"criterion_curve", curve},
+                             {"linear", LinearJson(linear)},
+                             {"refined", RefinedJson(linear, estimate.refined)},
+                             {"warnings", estimate.warnings}};
+    AddCommonReportSections(*app, loaded, nullptr, &report);
+    if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     if (!options->flights.quiet) {
       std::cout << "rotorid delay: " << 1000 * estimate.delay_s << " ms +- " << 1000 * estimate.delay_std_s
                 << " ms (global search best " << 1000 * estimate.grid_best_s << " ms over ["

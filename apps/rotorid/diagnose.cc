@@ -43,17 +43,17 @@ Command AddDiagnoseCommand(CLI::App& root) {
   command.app->add_option("--window-s", d.location.window_s, "length of the stretches of the flight (s)")
       ->capture_default_str();
   command.app->add_option("--threads", d.num_threads, "refinements run in parallel")->capture_default_str();
-  command.run = [options]() {
+  command.run = [options, app = command.app]() {
     DiagnosisOptions diagnosis = options->diagnosis;
     diagnosis.identify = ResolveIdentifyOptions(&options->identify);
     diagnosis.candidates = ParseEffectList(options->effects);
     if (const std::string problem = diagnosis.Validate(); !problem.empty()) throw Error(problem);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const std::vector<ProcessedFlight> flights =
-        ProcessFlights(LoadTrainingFlights(options->flights, source), diagnosis.identify.observation);
+    const LoadedFlights training = LoadTrainingFlights(options->flights, source);
+    const LoadedFlights validation = LoadValidationFlights(options->flights, source);
+    const std::vector<ProcessedFlight> flights = ProcessFlights(training.flights, diagnosis.identify.observation);
     std::vector<ProcessedFlight> held_out;
-    if (!options->flights.validate_log_paths.empty())
-      held_out = ProcessFlights(LoadValidationFlights(options->flights, source), diagnosis.identify.observation);
+    if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, diagnosis.identify.observation);
 
     Progress progress("diagnose", 0, options->flights.quiet);
     const Diagnosis result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
@@ -65,6 +65,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
     report["settings"] = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
                           {"tls", TlsOptionsJson(diagnosis.identify.tls)},
                           {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
+    AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {

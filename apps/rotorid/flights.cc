@@ -1,40 +1,73 @@
 #include <algorithm>
 #include <iomanip>
-#include <sstream>
 #include <iostream>
+#include <sstream>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/report/input_json.h"
 
 namespace rotorid::cli {
+
+namespace {
+
+bool options_validated = false;
+
+// --window values are checked while parsing, so that a bad one is a usage error.
+std::string CheckWindow(const std::string& text) {
+  try {
+    ParseTimeWindow(text);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+void MarkOptionsValidated() { options_validated = true; }
+bool OptionsValidated() { return options_validated; }
 
 void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out) {
   app->add_option("--vehicle", options->vehicle_paths, "vehicle file (YAML); repeat for several configurations")
       ->required()
       ->check(CLI::ExistingFile);
-  app->add_option("--log", options->log_paths, "flight log (CSV, PX4 ULog or Crazyflie micro-SD), paired with --vehicle")
+  app->add_option("--log", options->log_paths,
+                  "flight log (CSV, PX4 ULog or Crazyflie micro-SD), paired with --vehicle")
       ->required()
       ->check(CLI::ExistingFile);
-  app->add_option("--weight", options->weights, "weight of each --vehicle/--log pair (default 1; the paper uses 2 for B)");
+  app->add_option("--weight", options->weights,
+                  "weight of each --vehicle/--log pair (default 1; the paper uses 2 for B)");
+  app->add_option("--window", options->windows,
+                  "START,END: seconds of the log's own time base to use, paired in order with --log")
+      ->check(CheckWindow);
   if (held_out) {
     app->add_option("--validate-vehicle", options->validate_vehicle_paths, "vehicle file of a held-out flight")
         ->check(CLI::ExistingFile);
-    app->add_option("--validate-log", options->validate_log_paths, "held-out flight log, paired with --validate-vehicle")
+    app->add_option("--validate-log", options->validate_log_paths,
+                    "held-out flight log, paired with --validate-vehicle")
         ->check(CLI::ExistingFile);
+    app->add_option("--validate-window", options->validate_windows, "START,END of each --validate-log, in order")
+        ->check(CheckWindow);
   }
+  app->add_option("--segment", options->segment,
+                  "auto: keep only the airborne, unsaturated stretches of each log; none: the whole log (or window)")
+      ->check(CLI::IsMember({"auto", "none"}))
+      ->capture_default_str();
   app->add_option("--json", options->json_path, "write the machine-readable report to this file");
   app->add_option("--report", options->report_dir, "write an HTML report with figures into this folder");
   app->add_flag("--quiet,-q", options->quiet, "print nothing but errors");
-  app->add_flag("--verbose,-v", options->verbose, "print solver details");
+  app->add_flag("--verbose,-v", options->verbose, "print solver details and library log lines");
 }
 
 void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* o) {
   ObservationOptions& obs = o->identify.observation;
   TlsOptions& tls = o->identify.tls;
-  app->add_option("--method", o->method, "noise-aware (default: errors-in-variables TLS with calibrated statistics) "
-                                          "or paper (the published procedure, for comparison)")
+  app->add_option("--method", o->method,
+                  "noise-aware (default: errors-in-variables TLS with calibrated statistics) "
+                  "or paper (the published procedure, for comparison)")
       ->capture_default_str();
   app->add_option("--source", o->source, "imu or mocap")->capture_default_str();
   app->add_option("--cutoff-hz", obs.filter.cutoff_hz, "low-pass cut-off of every signal (Hz)")->capture_default_str();
@@ -44,23 +77,25 @@ void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* o) {
   app->add_option("--edge-trim-s", obs.edge_trim_s, "seconds left out at each end of a flight")->capture_default_str();
   app->add_option("--r-sigma", tls.r_sigma, "paper method: essential parameters until max/min %sigma < r_sigma")
       ->capture_default_str();
-  app->add_option("--max-rel-std", tls.max_rel_std_pct,
-                  "noise-aware method: drop parameters whose %sigma exceeds this")->capture_default_str();
+  app->add_option("--max-rel-std", tls.max_rel_std_pct, "noise-aware method: drop parameters whose %sigma exceeds this")
+      ->capture_default_str();
   app->add_flag("!--all-parameters", tls.select_essential, "keep every parameter (no essential selection)");
   app->add_flag("!--no-component-weighting", tls.weight_by_component, "paper method: no weighting by wrench component");
   app->add_option("--fix-zero", o->fixed_zero, "hold this parameter at 0 (repeatable), e.g. A.I_xy");
   app->add_flag("--allow-partial", o->identify.allow_partial,
                 "accept a result in which roll or pitch inertia is not identifiable");
-  app->add_option("--rotor-signal", o->rotor_signal, "auto, rpm or command (logs that have both)")->capture_default_str();
+  app->add_option("--rotor-signal", o->rotor_signal, "auto, rpm or command (logs that have both)")
+      ->capture_default_str();
   app->add_option("--column-map", o->column_map, "column map (YAML) for CSV exports of other tools");
 }
 
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* o) {
   o->identify.tls.method = ParseTlsMethod(o->method);
-  if (o->source != "imu" && o->source != "mocap") throw Error("--source must be imu or mocap, got '" + o->source + "'");
+  if (o->source != "imu" && o->source != "mocap")
+    throw UsageError("--source must be imu or mocap, got '" + o->source + "'");
   o->identify.observation.source = o->source == "imu" ? DataSource::kImu : DataSource::kMocap;
   o->identify.tls.fixed_zero = o->fixed_zero;
-  if (const std::string problem = o->identify.Validate(); !problem.empty()) throw Error(problem);
+  if (const std::string problem = o->identify.Validate(); !problem.empty()) throw UsageError(problem);
   return o->identify;
 }
 
@@ -68,37 +103,61 @@ FlightSourceOptions SourceOptions(const IdentifyCliOptions& o) {
   FlightSourceOptions source;
   source.rotor_signal = o.rotor_signal;
   source.column_map_path = o.column_map;
-  if (const std::string problem = source.Validate(); !problem.empty()) throw Error(problem);
+  if (const std::string problem = source.Validate(); !problem.empty()) throw UsageError(problem);
   return source;
 }
 
-std::vector<FlightData> LoadFlights(const std::vector<std::string>& vehicle_paths,
-                                    const std::vector<std::string>& log_paths, const std::vector<double>& weights,
-                                    const FlightSourceOptions& source) {
+namespace {
+
+std::string CountMismatch(size_t got, const std::string& what, size_t logs, const std::string& log_option) {
+  return "got " + std::to_string(got) + " " + what + " for " + std::to_string(logs) + " " + log_option +
+         "; give one per log, in the same order";
+}
+
+LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const std::vector<std::string>& log_paths,
+                          const std::vector<double>& weights, const std::vector<std::string>& windows,
+                          const std::string& log_option, const FlightOptions& options,
+                          const FlightSourceOptions& source) {
   if (vehicle_paths.size() != log_paths.size())
-    throw Error("got " + std::to_string(vehicle_paths.size()) + " vehicle files and " +
-                std::to_string(log_paths.size()) + " logs; give them in pairs");
+    throw UsageError(CountMismatch(vehicle_paths.size(), "vehicle files", log_paths.size(), log_option));
   if (!weights.empty() && weights.size() != log_paths.size())
-    throw Error("got " + std::to_string(weights.size()) + " --weight values for " + std::to_string(log_paths.size()) +
-                " flights; give one per flight or none");
-  std::vector<FlightData> flights;
+    throw UsageError(CountMismatch(weights.size(), "--weight values", log_paths.size(), log_option));
+  if (!windows.empty() && windows.size() != log_paths.size())
+    throw UsageError(CountMismatch(windows.size(), "windows", log_paths.size(), log_option));
+  for (double weight : weights)
+    if (!(weight > 0.0)) throw UsageError("--weight must be positive, got " + std::to_string(weight));
+  MarkOptionsValidated();
+  const SegmentMode mode = ParseSegmentMode(options.segment);
+  LoadedFlights loaded;
   for (size_t i = 0; i < log_paths.size(); ++i) {
-    FlightData flight;
-    flight.vehicle = ReadVehicleYaml(vehicle_paths[i]);
-    flight.log = LoadFlightLog(log_paths[i], flight.vehicle, source);
-    flight.weight = weights.empty() ? 1.0 : weights[i];
-    if (!(flight.weight > 0.0)) throw Error("--weight must be positive, got " + std::to_string(flight.weight));
-    flights.push_back(std::move(flight));
+    const Vehicle vehicle = ReadVehicleYaml(vehicle_paths[i]);
+    const std::optional<TimeWindow> window =
+        windows.empty() ? std::nullopt : std::optional<TimeWindow>(ParseTimeWindow(windows[i]));
+    SelectedFlight selected = SelectFlight(LoadFlightLog(log_paths[i], vehicle, source), log_paths[i], window, mode);
+    if (!options.quiet) std::cout << selected.summary.ConsoleLine() << "\n";
+    for (FlightLog& segment : selected.segments)
+      loaded.flights.push_back({vehicle, std::move(segment), weights.empty() ? 1.0 : weights[i]});
+    loaded.inputs.push_back(std::move(selected.summary));
   }
-  return flights;
+  return loaded;
 }
 
-std::vector<FlightData> LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source) {
-  return LoadFlights(options.vehicle_paths, options.log_paths, options.weights, source);
+}  // namespace
+
+LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source) {
+  return LoadFlights(options.vehicle_paths, options.log_paths, options.weights, options.windows, "--log", options,
+                     source);
 }
 
-std::vector<FlightData> LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source) {
-  return LoadFlights(options.validate_vehicle_paths, options.validate_log_paths, {}, source);
+LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source) {
+  return LoadFlights(options.validate_vehicle_paths, options.validate_log_paths, {}, options.validate_windows,
+                     "--validate-log", options, source);
+}
+
+void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training, const LoadedFlights* held_out,
+                             nlohmann::json* report) {
+  (*report)["input"] = InputJson(training.inputs, held_out ? held_out->inputs : std::vector<FlightInputSummary>{});
+  if (const nlohmann::json config = ConfigJson(app); !config.is_null()) (*report)["config"] = config;
 }
 
 std::string FormatComponents(const std::vector<std::optional<double>>& values) {
@@ -114,12 +173,13 @@ std::string FormatComponents(const std::vector<std::optional<double>>& values) {
 void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution) {
   size_t width = 10;
   for (const std::string& n : names) width = std::max(width, n.size() + 2);
-  out << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(14) << "value" << std::setw(12) << "std"
-      << std::setw(10) << "%sigma" << "  essential\n";
+  out << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(14) << "value"
+      << std::setw(12) << "std" << std::setw(10) << "%sigma"
+      << "  essential\n";
   for (size_t k = 0; k < names.size(); ++k) {
-    out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific << std::setprecision(4)
-        << std::setw(14) << solution.chi[k] << std::setprecision(2) << std::setw(12) << solution.std[k] << std::fixed
-        << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[k] << "  "
+    out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific
+        << std::setprecision(4) << std::setw(14) << solution.chi[k] << std::setprecision(2) << std::setw(12)
+        << solution.std[k] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[k] << "  "
         << (solution.essential[k] ? "yes" : "no (discarded)") << "\n";
   }
   out.unsetf(std::ios::floatfield);

@@ -15,20 +15,24 @@ Command AddIdentifyCommand(CLI::App& root) {
   };
   auto options = std::make_shared<Options>();
   Command command;
-  command.app = root.add_subcommand(
-      "identify", "the paper's IDIM-TLS: parameters with statistics, essential parameters, weighted and "
-                  "multi-configuration TLS (repeat --vehicle/--log for configurations A and B)");
+  command.app =
+      root.add_subcommand("identify",
+                          "the paper's IDIM-TLS: parameters with statistics, essential parameters, weighted and "
+                          "multi-configuration TLS (repeat --vehicle/--log for configurations A and B)");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
   AddIdentifyOptions(command.app, &options->identify);
-  command.run = [options]() {
+  command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
-    const std::vector<FlightData> flights = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
+    const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
+    const std::vector<FlightData>& flights = loaded.flights;
     const IdentificationResult result = Identify(flights, identify);
-    const nlohmann::json report = {{"rotorid_version", kRotoridVersion},
-                                   {"command", "identify"},
-                                   {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
-                                                 {"tls", TlsOptionsJson(identify.tls)}}},
-                                   {"linear", LinearJson(result)}};
+    nlohmann::json report = {
+        {"rotorid_version", kRotoridVersion},
+        {"command", "identify"},
+        {"settings",
+         {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
+        {"linear", LinearJson(result)}};
+    AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {

@@ -82,14 +82,16 @@ Command AddRefineCommand(CLI::App& root) {
                         "keep the linear step's discarded parameters at zero (no re-selection on corrected rows)");
   command.app->add_option("--max-iterations", options->refine.max_iterations)->capture_default_str();
   command.app->add_option("--threads", options->refine.num_threads)->capture_default_str();
-  command.run = [options]() {
+  command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     RefineOptions refine = options->refine;
     refine.effects = ParseEffectList(options->effects);
     for (const std::string& assignment : options->initial) refine.initial.Assign(assignment);
     if (const std::string problem = refine.Validate(); !problem.empty()) throw Error(problem);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const IdentificationResult linear = Identify(LoadTrainingFlights(options->flights, source), identify);
+    const LoadedFlights training = LoadTrainingFlights(options->flights, source);
+    const LoadedFlights validation = LoadValidationFlights(options->flights, source);
+    const IdentificationResult linear = Identify(training.flights, identify);
     const RefineResult refined = Refine(linear, refine);
 
     nlohmann::json report = {
@@ -103,13 +105,14 @@ Command AddRefineCommand(CLI::App& root) {
     std::vector<std::optional<double>> held_out_linear, held_out_refined;
     std::vector<ProcessedFlight> held_out;
     if (!options->flights.validate_log_paths.empty()) {
-      held_out = ProcessFlights(LoadValidationFlights(options->flights, source), identify.observation);
+      held_out = ProcessFlights(validation.flights, identify.observation);
       held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
       held_out_refined = RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi),
                                                   refined.effects);
       report["held_out"] = {{"linear", {{"relative_error_pct", ComponentsJson(held_out_linear)}}},
                             {"refined", {{"relative_error_pct", ComponentsJson(held_out_refined)}}}};
     }
+    AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     if (!options->flights.report_dir.empty()) {
       ReportInput input;

@@ -1,6 +1,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,9 +43,11 @@ int RunSimulate(const CLI::App& app, const SimulateArguments& args) {
   options.noise = NoiseLevels::Preset(args.noise);
   for (const std::string& effect : args.effects) options.effects.Assign(effect);
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
-
-  const SimulationVehicle simulated =
-      args.vehicle_path.empty() ? PresetVehicle(args.preset) : LoadSimulationVehicle(args.vehicle_path);
+  // An unknown preset is a usage error; a bad vehicle file is bad input.
+  std::optional<SimulationVehicle> preset;
+  if (args.vehicle_path.empty()) preset = PresetVehicle(args.preset);
+  MarkOptionsValidated();
+  const SimulationVehicle simulated = preset ? *preset : LoadSimulationVehicle(args.vehicle_path);
   SimulationResult result = Simulate(simulated.vehicle, simulated.parameters, options);
   result.parameters_source = simulated.parameters_source;
   if (args.vehicle_path.empty())

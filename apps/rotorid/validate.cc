@@ -2,8 +2,8 @@
 #include <memory>
 
 #include "commands.h"
-#include "rotorid/report/html_report.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 
@@ -20,8 +20,9 @@ Command AddValidateCommand(CLI::App& root) {
   auto options = std::make_shared<Options>();
   Command command;
   command.app = root.add_subcommand(
-      "validate", "applies saved parameters (--params, an identify or refine report) to other flights: the paper's "
-                  "cross-validation, Table III");
+      "validate",
+      "applies saved parameters (--params, an identify or refine report) to other flights: the paper's "
+      "cross-validation, Table III");
   command.app->add_option("--params", options->params_path, "identify/refine JSON report")
       ->required()
       ->check(CLI::ExistingFile);
@@ -29,23 +30,23 @@ Command AddValidateCommand(CLI::App& root) {
   command.app->add_option("--rotor-signal", options->rotor_signal, "auto, rpm or command");
   command.app->add_option("--column-map", options->column_map, "column map (YAML) for CSV exports of other tools");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
-  command.run = [options]() {
+  command.run = [options, app = command.app]() {
+    FlightSourceOptions source;
+    source.rotor_signal = options->rotor_signal;
+    source.column_map_path = options->column_map;
+    if (const std::string problem = source.Validate(); !problem.empty()) throw UsageError(problem);
+    const LoadedFlights loaded = LoadTrainingFlights(options->flights, source);
     const nlohmann::json params = ReadJsonFile(options->params_path);
     const std::map<std::string, double> values =
         ParameterValuesFromReport(params, options->params_path, options->block);
     // Rows are built exactly as in the run that produced the parameters.
-    const ObservationOptions observation =
-        ObservationOptionsFromJson(params.contains("settings") && params["settings"].contains("observation")
-                                       ? params["settings"]["observation"]
-                                       : nlohmann::json());
-    FlightSourceOptions source;
-    source.rotor_signal = options->rotor_signal;
-    source.column_map_path = options->column_map;
-    const std::vector<ProcessedFlight> flights =
-        ProcessFlights(LoadTrainingFlights(options->flights, source), observation);
+    const ObservationOptions observation = ObservationOptionsFromJson(
+        params.contains("settings") && params["settings"].contains("observation") ? params["settings"]["observation"]
+                                                                                  : nlohmann::json());
+    const std::vector<ProcessedFlight> flights = ProcessFlights(loaded.flights, observation);
     // Refined parameters are only valid together with their effects.
-    const bool refined = options->block == "refined" ||
-                         (options->block.empty() && params.contains("refined") && params["refined"].contains("parameters"));
+    const bool refined = options->block == "refined" || (options->block.empty() && params.contains("refined") &&
+                                                         params["refined"].contains("parameters"));
     const Effects effects = refined ? EffectsFromReport(params) : Effects{};
     const auto combined = RelativeErrorWithEffects(flights, values, effects);
     nlohmann::json per_flight = nlohmann::json::array();
@@ -62,6 +63,7 @@ Command AddValidateCommand(CLI::App& root) {
                              {"settings", {{"observation", ObservationOptionsJson(observation)}}},
                              {"relative_error_pct", ComponentsJson(combined)},
                              {"flights", per_flight}};
+    AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {

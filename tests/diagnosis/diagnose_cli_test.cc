@@ -72,11 +72,11 @@ TEST(DiagnoseCliTest, BadCandidateAndMissingLogFail) {
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const auto bad_effect =
       RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--effects", "delay,wobble"});
-  EXPECT_EQ(bad_effect.exit_code, 1);
+  EXPECT_EQ(bad_effect.exit_code, 2);  // a usage error
   EXPECT_NE(bad_effect.err.find("wobble"), std::string::npos) << bad_effect.err;
   const auto bad_folds =
       RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--folds", "1"});
-  EXPECT_EQ(bad_folds.exit_code, 1);
+  EXPECT_EQ(bad_folds.exit_code, 2);
   EXPECT_NE(bad_folds.err.find("folds"), std::string::npos) << bad_folds.err;
   const auto missing = RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/none.csv"});
   EXPECT_NE(missing.exit_code, 0);

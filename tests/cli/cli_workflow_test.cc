@@ -1,0 +1,193 @@
+// End-to-end tests of the CLI's conventions and workflow (docs/cli.md): usage errors, output
+// paths checked before the work, --window and --segment, input.flights[] and the "read:" line.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "support/test_support.h"
+
+namespace rotorid {
+namespace {
+
+using testing::MakeTempDir;
+using testing::RunRotorid;
+using testing::Slurp;
+
+nlohmann::json LoadJson(const std::string& path) { return nlohmann::json::parse(Slurp(path)); }
+
+class CliWorkflowTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string(MakeTempDir("rotorid-cli-workflow"));
+    const auto r = RunRotorid({"simulate", "--preset", "B", "--seconds", "20", "--seed", "5", "--out", Path("f.csv"),
+                               "--vehicle-out", Path("B.yaml"), "--quiet"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string Path(const std::string& name) { return *dir_ + "/" + name; }
+  static std::vector<std::string> Args(std::vector<std::string> head) {
+    for (const std::string& a : std::vector<std::string>{"--vehicle", Path("B.yaml"), "--log", Path("f.csv")})
+      head.push_back(a);
+    return head;
+  }
+  static std::string* dir_;
+};
+std::string* CliWorkflowTest::dir_ = nullptr;
+
+void ExpectUsageError(const testing::CommandResult& r, const std::string& what) {
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("rotorid: error: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--help"), std::string::npos) << "no hint: " << r.err;
+  EXPECT_EQ(r.out.find("read:"), std::string::npos) << "work started before the usage error: " << r.out;
+}
+
+TEST_F(CliWorkflowTest, UsageErrorsExitTwoWithPrefixAndHint) {
+  ExpectUsageError(RunRotorid({"frobnicate"}), "unknown subcommand 'frobnicate'");
+  ExpectUsageError(RunRotorid({}), "a subcommand is required");
+  ExpectUsageError(RunRotorid(Args({"identify", "--frobnicate"})), "--frobnicate");
+  ExpectUsageError(RunRotorid({"identify", "--vehicle"}), "--vehicle");
+  ExpectUsageError(RunRotorid(Args({"identify", "--cutoff-hz", "fast"})), "--cutoff-hz");
+  ExpectUsageError(RunRotorid(Args({"identify", "--source", "gps"})), "--source");
+  ExpectUsageError(RunRotorid(Args({"refine", "--effects", "delay,wobble"})), "wobble");
+  ExpectUsageError(RunRotorid(Args({"identify", "--segment", "sometimes"})), "--segment");
+  ExpectUsageError(RunRotorid(Args({"identify", "--window", "12,3"})), "must start before it ends");
+  ExpectUsageError(RunRotorid(Args({"identify", "--window", "1,5", "--window", "6,9"})), "2 windows for 1 --log");
+  ExpectUsageError(RunRotorid(Args({"diagnose", "--folds", "1"})), "folds");
+  const auto help = RunRotorid({"identify", "--help"});
+  EXPECT_EQ(help.exit_code, 0);
+}
+
+TEST_F(CliWorkflowTest, OutputPathsAreCheckedBeforeTheWork) {
+  ExpectUsageError(RunRotorid(Args({"identify", "--json", ""})), "must not be empty");
+  ExpectUsageError(RunRotorid(Args({"diagnose", "--json", Path("missing/d.json")})), "does not exist");
+  ExpectUsageError(RunRotorid(Args({"identify", "--json", *dir_})), "is a folder");
+  std::ofstream(Path("plain_file")) << "x";
+  ExpectUsageError(RunRotorid(Args({"refine", "--report", Path("plain_file")})), "is not a folder");
+  ExpectUsageError(RunRotorid({"simulate", "--out", Path("missing/x.csv")}), "does not exist");
+}
+
+TEST_F(CliWorkflowTest, LibraryLogLinesOnlyUnderVerbose) {
+  const auto quiet = RunRotorid(Args({"refine", "--effects", "delay,motor_lag", "-q"}));
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_EQ(quiet.out, "");
+  const auto normal = RunRotorid(Args({"refine", "--effects", "delay,motor_lag"}));
+  ASSERT_EQ(normal.exit_code, 0) << normal.err;
+  // glog lines start with a severity letter and the date, e.g. "W1201 20:04:09.123 ...".
+  for (size_t pos = 0; pos < normal.err.size(); pos = normal.err.find('\n', pos) + 1) {
+    EXPECT_FALSE(normal.err.size() > pos + 5 && std::string("IWEF").find(normal.err[pos]) != std::string::npos &&
+                 std::isdigit(static_cast<unsigned char>(normal.err[pos + 1])))
+        << normal.err;
+    if (normal.err.find('\n', pos) == std::string::npos) break;
+  }
+}
+
+TEST_F(CliWorkflowTest, WindowCutsTheLogAndIsRecorded) {
+  const auto r = RunRotorid(Args({"identify", "--window", "4,14", "--segment", "none", "--json", Path("w.json")}));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("read: " + Path("f.csv") + " (csv, 200 Hz, rpm from rotor_1..rotor_4), 4.00-14.00 s"),
+            std::string::npos)
+      << r.out;
+  const nlohmann::json flight = LoadJson(Path("w.json"))["input"]["flights"].at(0);
+  EXPECT_EQ(flight["file"], Path("f.csv"));
+  EXPECT_EQ(flight["format"], "csv");
+  EXPECT_EQ(flight["rotor_signal"], "rpm");
+  EXPECT_NEAR(flight["sample_rates_hz"]["imu"].get<double>(), 200.0, 0.5);
+  EXPECT_NEAR(flight["used_s"].get<double>(), 10.0, 0.01);
+  EXPECT_EQ(flight["window_s"], nlohmann::json({4.0, 14.0}));
+  ASSERT_EQ(flight["segments_left_out"].size(), 2u);
+  EXPECT_EQ(flight["segments_left_out"][0]["reason"], "outside --window");
+  EXPECT_NEAR(flight["segments_left_out"][1]["start"].get<double>(), 14.0, 0.01);
+  ASSERT_EQ(flight["segments_kept"].size(), 1u);
+  EXPECT_NEAR(flight["segments_kept"][0]["start"].get<double>(), 4.0, 0.01);
+
+  const auto outside = RunRotorid(Args({"identify", "--window", "30,40"}));
+  EXPECT_EQ(outside.exit_code, 1) << outside.err;
+  EXPECT_NE(outside.err.find(Path("f.csv") + ": --window 30,40 holds no samples"), std::string::npos) << outside.err;
+}
+
+TEST_F(CliWorkflowTest, EveryReportHasInputFlights) {
+  const auto identify = RunRotorid(Args({"identify", "--json", Path("i.json")}));
+  ASSERT_EQ(identify.exit_code, 0) << identify.err;
+  const std::vector<std::vector<std::string>> runs = {
+      Args({"refine", "--effects", "delay", "--validate-vehicle", Path("B.yaml"), "--validate-log", Path("f.csv"),
+            "--validate-window", "10,20", "--json", Path("r.json")}),
+      Args({"delay", "--json", Path("d.json")}),
+      Args({"validate", "--params", Path("i.json"), "--json", Path("v.json")})};
+  for (const auto& args : runs) {
+    const auto r = RunRotorid(args);
+    ASSERT_EQ(r.exit_code, 0) << args[0] << ": " << r.err;
+    const nlohmann::json report = LoadJson(*(std::find(args.begin(), args.end(), "--json") + 1));
+    ASSERT_EQ(report["input"]["flights"].size(), 1u) << args[0];
+    EXPECT_EQ(report["input"]["flights"][0]["rotor_signal"], "rpm") << args[0];
+  }
+  const nlohmann::json refine = LoadJson(Path("r.json"));
+  EXPECT_NEAR(refine["input"]["validate_flights"][0]["used_s"].get<double>(), 10.0, 0.01);
+}
+
+// The ARPL Crazyflie logs (../shared/data/real/crazyflie-arpl-sysid/SOURCE.md): raw they cannot be
+// identified; cut to the source's window, or segmented automatically, they can.
+TEST(CliWorkflowRealTest, ArplCrazyflieWindowsAndSegmentsMakeRawLogsUsable) {
+  const auto log = testing::SharedDataPath("real/crazyflie-arpl-sysid/raw/log15");
+  if (!log) GTEST_SKIP() << "crazyflie-arpl-sysid absent";
+  const std::string vehicle = testing::SourceDir() + "/data/vehicles/crazyflie21_brushed.yaml";
+  const std::string dir = MakeTempDir("rotorid-arpl");
+  const auto raw = RunRotorid({"identify", "--vehicle", vehicle, "--log", *log, "--segment", "none"});
+  EXPECT_EQ(raw.exit_code, 1);
+  EXPECT_NE(raw.err.find("kt could not be identified"), std::string::npos) << raw.err;
+
+  const auto window = RunRotorid(
+      {"identify", "--vehicle", vehicle, "--log", *log, "--window", "55,90", "--json", dir + "/window.json"});
+  ASSERT_EQ(window.exit_code, 0) << window.err;
+  const nlohmann::json report = LoadJson(dir + "/window.json");
+  // The source notebook's Ixx = 1.029e-5 and Iyy = 1.105e-5 kg m^2 (its own mass and arm).
+  EXPECT_NEAR(report["linear"]["parameters"]["cf21_brushed.I_xx"]["value"].get<double>(), 1.029e-5, 0.2e-5);
+  EXPECT_NEAR(report["linear"]["parameters"]["cf21_brushed.I_yy"]["value"].get<double>(), 1.105e-5, 0.25e-5);
+  const nlohmann::json& flight = report["input"]["flights"][0];
+  EXPECT_EQ(flight["format"], "crazyflie_usd");
+  EXPECT_EQ(flight["rotor_signal"], "command");
+  EXPECT_NE(flight["rotor_signal_source"].get<std::string>().find("motor.m1"), std::string::npos);
+  EXPECT_NEAR(flight["sample_rates_hz"]["imu"].get<double>(), 1011.0, 5.0);
+
+  const auto segmented = RunRotorid({"identify", "--vehicle", vehicle, "--log", *log, "--json", dir + "/auto.json"});
+  ASSERT_EQ(segmented.exit_code, 0) << segmented.err;
+  EXPECT_NE(segmented.out.find("on ground"), std::string::npos) << segmented.out;
+  std::set<std::string> reasons;
+  const nlohmann::json segmented_report = LoadJson(dir + "/auto.json");
+  for (const auto& span : segmented_report["input"]["flights"][0]["segments_left_out"])
+    reasons.insert(span["reason"].get<std::string>());
+  for (const char* reason : {"on ground", "take-off", "landing", "impact or spike"})
+    EXPECT_EQ(reasons.count(reason), 1u) << reason;
+}
+
+// A ULog read through its motor commands says so (a truncated log without esc_rpm falls back to
+// them in "auto").
+TEST(CliWorkflowRealTest, UlogCommandSignalIsNamed) {
+  const auto log = testing::SharedDataPath("real/px4-flightreview-rs-lowrate/raw/ekf_failure.ulg");
+  if (!log) GTEST_SKIP() << "px4-flightreview-rs-lowrate absent";
+  const std::string dir = MakeTempDir("rotorid-ulog-read");
+  std::ofstream(dir + "/quad.yaml") << "name: q\nmass: 2.0\nrotors:\n"
+                                    << "  - {position: [0.11, -0.11, 0], spin: 1}\n"
+                                    << "  - {position: [-0.11, 0.11, 0], spin: 1}\n"
+                                    << "  - {position: [0.11, 0.11, 0], spin: -1}\n"
+                                    << "  - {position: [-0.11, -0.11, 0], spin: -1}\n";
+  const auto r = RunRotorid({"identify", "--vehicle", dir + "/quad.yaml", "--log", *log, "--rotor-signal", "command",
+                             "--allow-partial", "--json", dir + "/u.json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("note: the rotor signal is the motor command"), std::string::npos) << r.out;
+  const nlohmann::json flight = LoadJson(dir + "/u.json")["input"]["flights"][0];
+  EXPECT_EQ(flight["format"], "px4_ulog");
+  EXPECT_EQ(flight["rotor_signal"], "command+voltage");
+  const std::string notes = flight["notes"].dump();
+  EXPECT_NE(notes.find("not a measured speed"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("command_to_speed"), std::string::npos) << notes;
+}
+
+}  // namespace
+}  // namespace rotorid
