@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -225,6 +226,28 @@ TEST(BlackboxFlightReal, MotorTimeConstantFromCommandToMeasuredSpeed) {
   EXPECT_GT(response.motor_tau_s, 0.010);
   EXPECT_LT(response.motor_tau_s, 0.045);
   EXPECT_GT(response.explained_pct, 90.0);
+}
+
+}  // namespace
+}  // namespace rotorid
+
+namespace rotorid {
+namespace {
+
+// End to end through the CLI: `rotorid identify` reads the .BFL directly (format detection), and
+// the thrust effectiveness kt/m lands near Table I's 0.621e-6 (m/s^2)/(rad/s)^2 (fits 0.59-0.79).
+TEST(BlackboxCli, IdentifyReadsTheTuDelftLogDirectly) {
+  const auto path = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00281.BFL");
+  if (!path) GTEST_SKIP() << "TU Delft logs absent";
+  const std::string dir = testing::MakeTempDir("blackbox_cli");
+  const std::string vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
+  const testing::CommandResult run =
+      testing::RunRotorid({"identify", "--vehicle", vehicle, "--log", *path, "--cutoff-hz", "30", "--all-parameters",
+                           "--allow-partial", "--json", dir + "/id.json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/id.json"));
+  const double kt = report.at("linear").at("parameters").at("kt").at("value").get<double>();
+  EXPECT_NEAR(kt / 0.3, 0.621e-6, 0.05e-6);  // the vehicle file's placeholder mass: 0.3 kg
 }
 
 }  // namespace
