@@ -257,6 +257,10 @@ class HtmlReportTest : public ::testing::Test {
       ASSERT_TRUE(check.well_formed) << check.error;
       EXPECT_EQ(check.root, "svg");
       EXPECT_GE(check.paths, 20);
+      // Beside every full-length wrench plot, its zoom.
+      if (name.rfind("fig_wrench_", 0) == 0) {
+        EXPECT_EQ(CountOccurrences(ReadFile(dir_ + "/" + name), " s zoom at "), 6);
+      }
     }
   }
 
