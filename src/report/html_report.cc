@@ -168,6 +168,8 @@ td.no { color: var(--muted); }
 .verdict pre { margin: 6px 0 0; white-space: pre-wrap; font: 13.5px/1.5 ui-monospace, SFMono-Regular, Menlo, Consolas,
                monospace; }
 tr.total td { font-weight: 600; }
+td.note { min-width: 200px; max-width: 280px; }
+.tag { white-space: nowrap; }
 .scroll { overflow-x: auto; }
 .box { padding: 10px 14px; border-left: 4px solid var(--warn-line); background: var(--warn-bg); margin: 10px 0;
        border-radius: 3px; }

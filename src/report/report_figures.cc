@@ -80,7 +80,7 @@ std::string ScreenLegend(int id, double x, double y, const char* colour, const s
   return "set arrow " + std::to_string(id) + " from screen " + Num(x) + ", screen " + Num(y) + " to screen " +
          Num(x + 0.025) + ", screen " + Num(y) + " nohead lw 2.5 lc rgb '" + colour + "'\nset label " +
          std::to_string(id) + " " + GnuplotString(text) + " at screen " + Num(x + 0.03) + ", screen " + Num(y) +
-         " left font ',11'\n";
+         " left font ',13'\n";
 }
 
 void AppendBlock(std::string* out, const Eigen::VectorXd& x, const Eigen::VectorXd& y, int max_points) {
@@ -190,13 +190,14 @@ FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label
   f.height_px = 150 + 185 * 6;
   std::string& body = f.body;
   body += MultiplotGrid(f, 6, num_columns, flight_label, 75, 60, 45, 105, 100, 60);
-  body += "set tics font ',11'\nset ytics nomirror\nset y2tics nomirror tc rgb '" + std::string(kErrorColour) +
+  body += "set tics font ',12'\nset ytics nomirror\nset y2tics nomirror tc rgb '" + std::string(kErrorColour) +
           "'\nunset key\nunset y2label\n";
   // One legend for the page, under its title; drawn with the first panel, then removed.
   const double legend_y = 1.0 - 52.0 / f.height_px;
-  body += ScreenLegend(101, 0.10, legend_y, kRigidBodyColour, "rigid body (IMU): m D_m + D chi");
-  body += ScreenLegend(102, 0.38, legend_y, kRotorModelColour, "rotor model: D_k chi_k");
-  body += ScreenLegend(103, 0.62, legend_y, kErrorColour, "error (right axis, green tics)");
+  const double legend_step = 330.0 / f.width_px;
+  body += ScreenLegend(101, 0.05, legend_y, kRigidBodyColour, "rigid body (IMU): m D_m + D chi");
+  body += ScreenLegend(102, 0.05 + legend_step, legend_y, kRotorModelColour, "rotor model: D_k chi_k");
+  body += ScreenLegend(103, 0.05 + 2 * legend_step, legend_y, kErrorColour, "error (right axis, green tics)");
   const std::string remove_legend =
       "unset arrow 101\nunset arrow 102\nunset arrow 103\nunset label 101\nunset label 102\nunset label 103\n";
   int block = 0;
@@ -206,11 +207,11 @@ FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label
     std::string title = std::string(kWrenchComponentNames[component]) + " (" + Unit(component) + "), " + column.label;
     std::string text = "unset object\n";
     if (!column.split || column.split->t_s.size() == 0)
-      return text + "set title " + GnuplotString(title) + " font ',11'\n" + EmptyPanel("no parameters for this flight");
+      return text + "set title " + GnuplotString(title) + " font ',13'\n" + EmptyPanel("no parameters for this flight");
     const WrenchSplit& split = *column.split;
     if (split.relative_error_pct[component])
       title += ": error " + Fixed(*split.relative_error_pct[component], 1) + " % of rotor wrench";
-    text += "set title " + GnuplotString(title) + " font ',11'\n";
+    text += "set title " + GnuplotString(title) + " font ',13'\n";
     const Eigen::VectorXd rigid = split.rigid_body.col(component), rotor = split.rotor_model.col(component),
                           error = split.error.col(component);
     if (!AnyFinite(rigid) && !AnyFinite(rotor) && !AnyFinite(error)) return text + EmptyPanel("no finite values");
@@ -245,15 +246,16 @@ FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label
         "unset object\nunset ylabel\nset title " +
         GnuplotString(std::string(kWrenchComponentNames[component]) + " (" + Unit(component) + "), " +
                       Fixed(window.second - window.first, 0) + " s zoom at " + Fixed(window.first, 1) + " s") +
-        " font ',11'\nset xrange [" + Num(window.first) + ":" + Num(window.second) + "]\n";
+        " font ',13'\nset xrange [" + Num(window.first) + ":" + Num(window.second) + "]\n";
     text += row == 5 ? "set xlabel 't (s)'\n" : "unset xlabel\n";
-    // The zoom's legend (which line is which set) on a line of its own under the page legend.
-    text += row == 0 ? "set key at screen " + Num(1.0 - 60.0 / f.width_px) + ", screen " +
-                           Num(1.0 - 66.0 / f.height_px) + " right top horizontal noopaque font ',10' samplen 2.5\n"
-                     : "unset key\n";
+    // With several sets, the zoom's legend (which line is which set) beside the page legend.
+    text += row == 0 && columns.size() > 1
+                ? "set key at screen " + Num(1.0 - 60.0 / f.width_px) + ", screen " + Num(1.0 - 40.0 / f.height_px) +
+                      " right top horizontal noopaque font ',13' samplen 2.5\n"
+                : "unset key\n";
     AppendWindow(&f.data, reference->t_s, reference->rigid_body.col(component), window.first, window.second, 100000);
     std::string plot = "plot $DATA index " + std::to_string(block++) + " using 1:2 with lines lw 2 lc rgb '" +
-                       kRigidBodyColour + "' title 'rigid body'";
+                       kRigidBodyColour + "' notitle";
     for (size_t s = 0; s < columns.size(); ++s) {
       if (!columns[s].split || columns[s].split->t_s.size() == 0) continue;
       const WrenchSplit& split = *columns[s].split;
