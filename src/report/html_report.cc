@@ -839,10 +839,10 @@ std::string ReportBuilder::Page() const {
                                   FlightsSection(),
                                   WarningsSection(),
                                   ParametersSection(),
+                                  FigureHtml("fig_parameters"),
                                   RelativeErrorSection(),
                                   WrenchSection(),
                                   SpectrumSection(),
-                                  FigureHtml("fig_parameters"),
                                   AblationSection(),
                                   checks_first ? "" : ChecksSection(),
                                   SettingsSection()};
@@ -858,10 +858,9 @@ std::string ReportBuilder::Page() const {
   if (root_.Has("command")) html += " &middot; command <code>" + Html(root_["command"].String()) + "</code>";
   html += " &middot; written " + Html(stamp) + "</div>\n<nav>";
   const std::pair<const char*, const char*> links[] = {
-      {"checks", "Checks"},     {"diagnosis", "Diagnosis"},   {"flights", "Flights"},
-      {"warnings", "Warnings"}, {"parameters", "Parameters"}, {"table3", "Table III"},
-      {"wrench", "Fig. 3/4"},   {"spectra", "Spectra"},       {"fig_parameters", "Estimates"},
-      {"ablation", "Ablation"}, {"settings", "Settings"}};
+      {"checks", "Checks"},         {"diagnosis", "Diagnosis"},      {"flights", "Flights"},  {"warnings", "Warnings"},
+      {"parameters", "Parameters"}, {"fig_parameters", "Estimates"}, {"table3", "Table III"}, {"wrench", "Fig. 3/4"},
+      {"spectra", "Spectra"},       {"ablation", "Ablation"},        {"settings", "Settings"}};
   for (const auto& [id, text] : links) {
     const std::string anchor = std::string("id=\"") + id + "\"";
     for (const std::string& s : sections)

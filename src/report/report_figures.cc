@@ -323,6 +323,15 @@ FigureSpec SpectrumFigure(const std::string& name, const std::string& group_labe
   return f;
 }
 
+namespace {
+// A ratio with 3 significant digits: "33", "5.01", "-0.00312".
+std::string Ratio(double r) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.3g", r);
+  return buffer;
+}
+}  // namespace
+
 double ParameterAxisHalfWidth(const std::vector<ParameterPoint>& points) {
   // Deviations from the reference (1) of the other sets' ratios and of every error bar's end.
   std::vector<double> deviations;
@@ -365,10 +374,9 @@ FigureSpec ParameterFigure(const std::string& name, const std::vector<std::strin
       const double err = k < p.std.size() && p.std[k] ? 3.0 * *p.std[k] / std::abs(reference) : 0.0;
       const bool outside = std::isfinite(ratio) && (ratio < low || ratio > high);
       outliers += outside;
-      const double edge = ratio > high ? high - 0.03 * half_width : low + 0.03 * half_width;
+      const double edge = ratio > high ? high - 0.06 * half_width : low + 0.06 * half_width;
       f.data += " " + Num(outside ? NAN : ratio) + " " + Num(err) + " " + Num(outside ? edge : NAN) + " " +
-                (ratio > high ? "9" : "11") + " " +
-                Token(outside ? Fixed(ratio, std::abs(ratio) < 10 ? 2 : 0) + "x" : "");
+                (ratio > high ? "9" : "11") + " " + Token(outside ? Ratio(ratio) + "x" : "");
     }
     f.data += "\n";
   }
@@ -381,7 +389,8 @@ FigureSpec ParameterFigure(const std::string& name, const std::vector<std::strin
   body += "set xtics rotate by -40 nomirror font ',10'\nset ytics nomirror\n";
   body += "set xrange [-0.7:" + Num(static_cast<double>(points.size()) - 0.3) + "]\n";
   body += "set yrange [" + Num(low) + ":" + Num(high) + "]\n";
-  body += "set ylabel 'estimate / reference'\nset key top right\n";
+  // The key outside the frame: markers at the edges must not hide under it.
+  body += "set ylabel 'estimate / reference'\nset key outside right top vertical\n";
   body += "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 3 lc rgb '#888888'\n";
   if (points.empty()) {
     body += EmptyPanel("no essential parameters");
