@@ -34,7 +34,7 @@ std::string BandLabel(const JsonNode& band) {
 std::string MagnitudeCell(const JsonNode& magnitude) {
   std::string out;
   for (const auto& [name, entry] : magnitude.Items())
-    out += std::string(out.empty() ? "" : "<br/>") + "<code>" + Html(name) + "</code> " +
+    out += std::string(out.empty() ? "" : "<br/>") + "<code>" + Html(name) + "</code><br/>" +
            ValueWithStd(entry["value"].Numbers(), entry["std"].Numbers(), EffectParameterUnit(name));
   return out;
 }
@@ -59,7 +59,7 @@ std::string RankingTable(const JsonNode& report) {
             Pct(entry["shrink_pct"].Number()) + "</td><td class=\"num\">" + MagnitudeCell(entry["magnitude"]) +
             "</td><td class=\"num\">" + DetectableCell(entry["detectable_above"]) + "</td><td class=\"num\">" +
             General(test["f_statistic"].Number()) + "</td><td class=\"num\">" +
-            Format("%.2g", test["p_value"].Number()) + "</td><td class=\"small\">" + Html(entry["note"].String()) +
+            Format("%.2g", test["p_value"].Number()) + "</td><td class=\"small note\">" + Html(entry["note"].String()) +
             "</td></tr>\n";
   }
   return html + "</tbody></table>\n";
@@ -122,7 +122,7 @@ std::string BandTable(const JsonNode& where, int component) {
     const double before = band["residual_rms"][name].Number(), after = band["final_residual_rms"][name].Number();
     const std::optional<double> removed =
         before > 0.0 ? std::optional(100.0 * (1.0 - after * after / (before * before))) : std::nullopt;
-    html += "<tr><td>" + BandLabel(band) + "</td><td class=\"num\">" + Format("%.4g", before) +
+    html += "<tr><td class=\"num\">" + BandLabel(band) + "</td><td class=\"num\">" + Format("%.4g", before) +
             "</td><td class=\"num\">" + Format("%.4g", after) + "</td><td class=\"num\">" + Pct(removed, 1) +
             "</td><td class=\"num\">" + Pct(band["share_pct"][name].Number(), 1) + "</td><td class=\"num\">" +
             Pct(band["residual_to_model_pct"][name].NumberOrNull(), 1) + "</td></tr>\n";
@@ -172,7 +172,7 @@ std::string ConfoundedTable(const JsonNode& report) {
             (correlation ? Format("%.3f", *correlation) : "&ndash;") + "</td><td class=\"num\">" +
             Format("%.2f", c["t_statistic"].Number()) + "</td><td class=\"num\">" +
             Format("%.2g", c["p_value"].Number()) + "</td><td>" + (c["distinguishable"].Bool() ? "yes" : "no") +
-            "</td><td class=\"small\">" + Html(c["note"].String()) + "</td></tr>\n";
+            "</td><td class=\"small note\">" + Html(c["note"].String()) + "</td></tr>\n";
   }
   return html + "</tbody></table>\n";
 }

@@ -168,6 +168,8 @@ td.no { color: var(--muted); }
 .verdict pre { margin: 6px 0 0; white-space: pre-wrap; font: 13.5px/1.5 ui-monospace, SFMono-Regular, Menlo, Consolas,
                monospace; }
 tr.total td { font-weight: 600; }
+td.note { min-width: 200px; max-width: 280px; }
+.tag { white-space: nowrap; }
 .scroll { overflow-x: auto; }
 .box { padding: 10px 14px; border-left: 4px solid var(--warn-line); background: var(--warn-bg); margin: 10px 0;
        border-radius: 3px; }
@@ -314,14 +316,17 @@ std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
     const std::string role = flight.held_out ? "held-out flight" : "identification flight";
     const std::string title = flight.label + " (" + role + ", configuration " + flight.flight->vehicle.name + ")";
     FigureSpec spec = internal::WrenchFigure("fig_wrench_" + std::to_string(f + 1), title, columns, marks_[f],
-                                             options_.max_points_per_series);
+                                             options_.max_points_per_series, options_.zoom_window_s);
     spec.title = title;
     spec.caption =
         "Per wrench component, the Newton-Euler wrench m D_m + D chi computed from the IMU (rigid body, blue) and "
         "the rotor model D_k chi_k computed from the rotor speeds (red); their difference rho, the equation error, "
         "is drawn in green against the right-hand axis. One column per parameter set. "
         "When the model holds, blue and red lie on top of each other and the error looks like noise without "
-        "structure." +
+        "structure. The right-hand column zooms into the " +
+        Format("%.0f", options_.zoom_window_s) +
+        " s where the rotor wrench changes most (dashed frame on the left): there a lead or lag of the rotor model "
+        "against the rigid body shows, and a refined set with a delay or motor lag should lie on the blue curve." +
         std::string(marks_[f].empty() ? "" : " Shaded: stretches the diagnosis points at.");
     if (!columns.empty()) specs.push_back(std::move(spec));
   }
@@ -834,10 +839,10 @@ std::string ReportBuilder::Page() const {
                                   FlightsSection(),
                                   WarningsSection(),
                                   ParametersSection(),
+                                  FigureHtml("fig_parameters"),
                                   RelativeErrorSection(),
                                   WrenchSection(),
                                   SpectrumSection(),
-                                  FigureHtml("fig_parameters"),
                                   AblationSection(),
                                   checks_first ? "" : ChecksSection(),
                                   SettingsSection()};
@@ -853,10 +858,9 @@ std::string ReportBuilder::Page() const {
   if (root_.Has("command")) html += " &middot; command <code>" + Html(root_["command"].String()) + "</code>";
   html += " &middot; written " + Html(stamp) + "</div>\n<nav>";
   const std::pair<const char*, const char*> links[] = {
-      {"checks", "Checks"},     {"diagnosis", "Diagnosis"},   {"flights", "Flights"},
-      {"warnings", "Warnings"}, {"parameters", "Parameters"}, {"table3", "Table III"},
-      {"wrench", "Fig. 3/4"},   {"spectra", "Spectra"},       {"fig_parameters", "Estimates"},
-      {"ablation", "Ablation"}, {"settings", "Settings"}};
+      {"checks", "Checks"},         {"diagnosis", "Diagnosis"},      {"flights", "Flights"},  {"warnings", "Warnings"},
+      {"parameters", "Parameters"}, {"fig_parameters", "Estimates"}, {"table3", "Table III"}, {"wrench", "Fig. 3/4"},
+      {"spectra", "Spectra"},       {"ablation", "Ablation"},        {"settings", "Settings"}};
   for (const auto& [id, text] : links) {
     const std::string anchor = std::string("id=\"") + id + "\"";
     for (const std::string& s : sections)
@@ -943,6 +947,7 @@ ReportSummary ReportBuilder::Build() {
 std::string ReportOptions::Validate() const {
   if (!(gnuplot_timeout_s > 0.0)) return "ReportOptions.gnuplot_timeout_s must be positive";
   if (max_points_per_series < 10) return "ReportOptions.max_points_per_series must be at least 10";
+  if (!(zoom_window_s >= 0.0)) return "ReportOptions.zoom_window_s must be 0 (no zoom) or positive";
   if (max_spectrum_segment < 16 || (max_spectrum_segment & (max_spectrum_segment - 1)) != 0)
     return "ReportOptions.max_spectrum_segment must be a power of two >= 16";
   return "";

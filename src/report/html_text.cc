@@ -99,15 +99,20 @@ DisplayUnit EffectParameterUnit(const std::string& parameter_name) {
 
 std::string ValueWithStd(const std::vector<double>& value, const std::vector<double>& std_dev,
                          const DisplayUnit& unit) {
-  auto list = [&](const std::vector<double>& v) {
-    std::string out;
-    for (size_t k = 0; k < v.size(); ++k) out += (k ? ", " : "") + General(v[k] * unit.scale);
-    return v.size() == 1 ? out : "(" + out + ")";
-  };
   if (value.empty()) return "&ndash;";
-  std::string out = list(value);
-  if (!std_dev.empty()) out += " &plusmn; " + list(std_dev);
-  return out + (unit.unit.empty() ? "" : " " + unit.unit);
+  const std::string suffix = unit.unit.empty() ? "" : " " + unit.unit;
+  auto one = [&](size_t k) {
+    return General(value[k] * unit.scale) +
+           (k < std_dev.size() ? " &plusmn; " + General(std_dev[k] * unit.scale) : std::string()) + suffix;
+  };
+  if (value.size() == 1) return one(0);
+  // A vector one component a line, so that a table cell stays narrow: "x: 0.011 ± 0.001 m/s²".
+  static const char* const kAxes[] = {"x", "y", "z"};
+  std::string out;
+  for (size_t k = 0; k < value.size(); ++k)
+    out +=
+        std::string(k ? "<br/>" : "") + (value.size() == 3 ? kAxes[k] : std::to_string(k + 1).c_str()) + ": " + one(k);
+  return out;
 }
 
 const char* ComponentUnit(int component) { return component < 3 ? "N" : "N m"; }

@@ -33,8 +33,8 @@ struct DisplayUnit {
   std::string unit;  // "" for dimensionless
 };
 DisplayUnit EffectParameterUnit(const std::string& parameter_name);
-// "12.3 &plusmn; 0.4 ms" or "(0.011, -0.02, 0) &plusmn; (0.001, 0.001, 0.001) m/s&sup2;"; the std
-// may be empty.
+// "12.3 &plusmn; 0.4 ms"; a vector one component a line ("x: 0.011 &plusmn; 0.001 m/s&sup2;<br/>y:
+// ..."). The std may be empty.
 std::string ValueWithStd(const std::vector<double>& value, const std::vector<double>& std_dev, const DisplayUnit& unit);
 
 // The unit of a wrench component: "N" or "N m".

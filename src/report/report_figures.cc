@@ -80,7 +80,7 @@ std::string ScreenLegend(int id, double x, double y, const char* colour, const s
   return "set arrow " + std::to_string(id) + " from screen " + Num(x) + ", screen " + Num(y) + " to screen " +
          Num(x + 0.025) + ", screen " + Num(y) + " nohead lw 2.5 lc rgb '" + colour + "'\nset label " +
          std::to_string(id) + " " + GnuplotString(text) + " at screen " + Num(x + 0.03) + ", screen " + Num(y) +
-         " left font ',11'\n";
+         " left font ',13'\n";
 }
 
 void AppendBlock(std::string* out, const Eigen::VectorXd& x, const Eigen::VectorXd& y, int max_points) {
@@ -130,36 +130,88 @@ std::string ScriptHead(const FigureSpec& figure, const std::string& output_path_
          "set key noopaque samplen 1.5 spacing 1.0 font ',9'\n";
 }
 
+std::pair<double, double> MostExcitedWindow(const WrenchSplit& split, double length_s) {
+  const Eigen::Index n = split.t_s.size();
+  if (n < 3 || split.t_s[n - 1] - split.t_s[0] <= length_s) return {n ? split.t_s[0] : 0.0, n ? split.t_s[n - 1] : 0.0};
+  // Score of a window: its share of each component's squared rotor-wrench change, summed over the
+  // components with a rotor wrench. A delay or lag shifts the curves by an amount proportional to
+  // that change, so this is where a lead or lag is easiest to see.
+  Eigen::VectorXd score = Eigen::VectorXd::Zero(n);
+  for (const int c : {2, 3, 4, 5}) {
+    Eigen::VectorXd change = Eigen::VectorXd::Zero(n);
+    for (Eigen::Index i = 1; i < n; ++i) {
+      const double d = split.rotor_model(i, c) - split.rotor_model(i - 1, c);
+      change[i] = std::isfinite(d) ? d * d : 0.0;
+    }
+    const double total = change.sum();
+    if (total > 0.0) score += change / total;
+  }
+  double best = -1.0, best_start = split.t_s[0], sum = 0.0;
+  for (Eigen::Index begin = 0, end = 0; begin < n; ++begin) {
+    while (end < n && split.t_s[end] < split.t_s[begin] + length_s) sum += score[end++];
+    if (end == n && split.t_s[n - 1] < split.t_s[begin] + length_s && begin > 0) break;  // window past the end
+    if (sum > best) {
+      best = sum;
+      best_start = split.t_s[begin];
+    }
+    sum -= score[begin];
+  }
+  return {best_start, best_start + length_s};
+}
+
+namespace {
+
+// One curve as a data block of at most max_points points between t0 and t1.
+void AppendWindow(std::string* out, const Eigen::VectorXd& t, const Eigen::VectorXd& y, double t0, double t1,
+                  int max_points) {
+  Eigen::Index first = 0, last = t.size();
+  while (first < t.size() && t[first] < t0) ++first;
+  while (last > first && t[last - 1] > t1) --last;
+  AppendBlock(out, t.segment(first, last - first), y.segment(first, last - first), max_points);
+}
+
+const char* SetColour(size_t set) { return set == 0 ? kRotorModelColour : Colour(set); }
+
+}  // namespace
+
 FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label,
                         const std::vector<WrenchColumn>& columns, const std::vector<TimeMark>& marks,
-                        int max_points_per_series) {
+                        int max_points_per_series, double zoom_s) {
   FigureSpec f;
   f.name = name;
-  const int num_columns = std::max<int>(1, static_cast<int>(columns.size()));
-  // Time series want width: one column still gets 900 px.
-  f.width_px = std::max(900, 560 * num_columns);
+  // The first column with values picks the zoom window, drawn beside the full-length columns.
+  const WrenchSplit* reference = nullptr;
+  for (const WrenchColumn& c : columns)
+    if (!reference && c.split && c.split->t_s.size() > 2) reference = &*c.split;
+  const bool zoom = reference && zoom_s > 0.0;
+  const std::pair<double, double> window = zoom ? MostExcitedWindow(*reference, zoom_s) : std::make_pair(0.0, 0.0);
+  const int num_columns = std::max<int>(1, static_cast<int>(columns.size())) + (zoom ? 1 : 0);
+  f.width_px = std::max(900, 75 + 60 + 480 * num_columns + 100 * (num_columns - 1));
   f.height_px = 150 + 185 * 6;
   std::string& body = f.body;
-  body += MultiplotGrid(f, 6, num_columns, flight_label, 85, 85, 45, 105, 170, 60);
-  body += "set ytics nomirror\nset y2tics nomirror tc rgb '" + std::string(kErrorColour) + "'\nunset key\n";
+  body += MultiplotGrid(f, 6, num_columns, flight_label, 75, 60, 45, 105, 100, 60);
+  body += "set tics font ',12'\nset ytics nomirror\nset y2tics nomirror tc rgb '" + std::string(kErrorColour) +
+          "'\nunset key\nunset y2label\n";
   // One legend for the page, under its title; drawn with the first panel, then removed.
   const double legend_y = 1.0 - 52.0 / f.height_px;
-  body += ScreenLegend(101, 0.14, legend_y, kRigidBodyColour, "rigid body (IMU): m D_m + D chi");
-  body += ScreenLegend(102, 0.42, legend_y, kRotorModelColour, "rotor model: D_k chi_k");
-  body += ScreenLegend(103, 0.70, legend_y, kErrorColour, "error (right axis)");
+  const double legend_step = 330.0 / f.width_px;
+  body += ScreenLegend(101, 0.05, legend_y, kRigidBodyColour, "rigid body (IMU): m D_m + D chi");
+  body += ScreenLegend(102, 0.05 + legend_step, legend_y, kRotorModelColour, "rotor model: D_k chi_k");
+  body += ScreenLegend(103, 0.05 + 2 * legend_step, legend_y, kErrorColour, "error (right axis, green tics)");
   const std::string remove_legend =
       "unset arrow 101\nunset arrow 102\nunset arrow 103\nunset label 101\nunset label 102\nunset label 103\n";
   int block = 0;
-  auto panel = [&](int row, const WrenchColumn& column) -> std::string {
+  auto panel = [&](int row, size_t column_index) -> std::string {
+    const WrenchColumn& column = columns[column_index];
     const int component = kPanelOrder[row];
     std::string title = std::string(kWrenchComponentNames[component]) + " (" + Unit(component) + "), " + column.label;
     std::string text = "unset object\n";
     if (!column.split || column.split->t_s.size() == 0)
-      return text + "set title " + GnuplotString(title) + " font ',10'\n" + EmptyPanel("no parameters for this flight");
+      return text + "set title " + GnuplotString(title) + " font ',13'\n" + EmptyPanel("no parameters for this flight");
     const WrenchSplit& split = *column.split;
     if (split.relative_error_pct[component])
       title += ": error " + Fixed(*split.relative_error_pct[component], 1) + " % of rotor wrench";
-    text += "set title " + GnuplotString(title) + " font ',10'\n";
+    text += "set title " + GnuplotString(title) + " font ',13'\n";
     const Eigen::VectorXd rigid = split.rigid_body.col(component), rotor = split.rotor_model.col(component),
                           error = split.error.col(component);
     if (!AnyFinite(rigid) && !AnyFinite(rotor) && !AnyFinite(error)) return text + EmptyPanel("no finite values");
@@ -169,9 +221,10 @@ FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label
       text += "set object " + std::to_string(object++) + " rect from first " + Num(mark.start_s) +
               ", graph 0 to first " + Num(mark.end_s) + ", graph 1 behind fc rgb '" + kMarkColour +
               "' fs solid 1.0 noborder\n";
-    text += "set ylabel " + GnuplotString(Unit(component)) + "\n";
-    text += "set y2label " + GnuplotString(std::string("error (") + Unit(component) + ")") + " tc rgb '" +
-            kErrorColour + "'\n";
+    if (zoom)  // where the zoom beside it is taken: a frame, not a fill
+      text += "set object " + std::to_string(object++) + " rect from first " + Num(window.first) +
+              ", graph 0 to first " + Num(window.second) + ", graph 1 front fs empty border lc rgb '#777777' dt 2\n";
+    text += column_index == 0 ? "set ylabel " + GnuplotString(Unit(component)) + "\n" : "unset ylabel\n";
     text += row == 5 ? "set xlabel 't (s)'\n" : "unset xlabel\n";
     AppendBlock(&f.data, split.t_s, rigid, max_points_per_series);
     AppendBlock(&f.data, split.t_s, rotor, max_points_per_series);
@@ -185,11 +238,40 @@ FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label
     block += 3;
     return text;
   };
-  for (int row = 0; row < 6; ++row)
+  // The zoom: the rigid body of the first set and every set's rotor model, undecimated, so that a
+  // lead or lag between them shows.
+  auto zoom_panel = [&](int row) -> std::string {
+    const int component = kPanelOrder[row];
+    std::string text =
+        "unset object\nunset ylabel\nset title " +
+        GnuplotString(std::string(kWrenchComponentNames[component]) + " (" + Unit(component) + "), " +
+                      Fixed(window.second - window.first, 0) + " s zoom at " + Fixed(window.first, 1) + " s") +
+        " font ',13'\nset xrange [" + Num(window.first) + ":" + Num(window.second) + "]\n";
+    text += row == 5 ? "set xlabel 't (s)'\n" : "unset xlabel\n";
+    // With several sets, the zoom's legend (which line is which set) beside the page legend.
+    text += row == 0 && columns.size() > 1
+                ? "set key at screen " + Num(1.0 - 60.0 / f.width_px) + ", screen " + Num(1.0 - 40.0 / f.height_px) +
+                      " right top horizontal noopaque font ',13' samplen 2.5\n"
+                : "unset key\n";
+    AppendWindow(&f.data, reference->t_s, reference->rigid_body.col(component), window.first, window.second, 100000);
+    std::string plot = "plot $DATA index " + std::to_string(block++) + " using 1:2 with lines lw 2 lc rgb '" +
+                       kRigidBodyColour + "' notitle";
+    for (size_t s = 0; s < columns.size(); ++s) {
+      if (!columns[s].split || columns[s].split->t_s.size() == 0) continue;
+      const WrenchSplit& split = *columns[s].split;
+      AppendWindow(&f.data, split.t_s, split.rotor_model.col(component), window.first, window.second, 100000);
+      plot += ", $DATA index " + std::to_string(block++) + " using 1:2 with lines lw 1.6 lc rgb '" + SetColour(s) +
+              "'" + (s ? " dt 2" : "") + " title " + GnuplotString("rotor model, " + columns[s].label);
+    }
+    return text + plot + "\nunset key\n";
+  };
+  for (int row = 0; row < 6; ++row) {
     for (size_t c = 0; c < columns.size(); ++c) {
-      body += panel(row, columns[c]);
+      body += panel(row, c);
       if (row == 0 && c == 0) body += remove_legend;
     }
+    if (zoom) body += zoom_panel(row);
+  }
   body += "unset multiplot\n";
   return f;
 }
@@ -241,6 +323,15 @@ FigureSpec SpectrumFigure(const std::string& name, const std::string& group_labe
   return f;
 }
 
+namespace {
+// A ratio with 3 significant digits: "33", "5.01", "-0.00312".
+std::string Ratio(double r) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.3g", r);
+  return buffer;
+}
+}  // namespace
+
 double ParameterAxisHalfWidth(const std::vector<ParameterPoint>& points) {
   // Deviations from the reference (1) of the other sets' ratios and of every error bar's end.
   std::vector<double> deviations;
@@ -283,10 +374,9 @@ FigureSpec ParameterFigure(const std::string& name, const std::vector<std::strin
       const double err = k < p.std.size() && p.std[k] ? 3.0 * *p.std[k] / std::abs(reference) : 0.0;
       const bool outside = std::isfinite(ratio) && (ratio < low || ratio > high);
       outliers += outside;
-      const double edge = ratio > high ? high - 0.03 * half_width : low + 0.03 * half_width;
+      const double edge = ratio > high ? high - 0.06 * half_width : low + 0.06 * half_width;
       f.data += " " + Num(outside ? NAN : ratio) + " " + Num(err) + " " + Num(outside ? edge : NAN) + " " +
-                (ratio > high ? "9" : "11") + " " +
-                Token(outside ? Fixed(ratio, std::abs(ratio) < 10 ? 2 : 0) + "x" : "");
+                (ratio > high ? "9" : "11") + " " + Token(outside ? Ratio(ratio) + "x" : "");
     }
     f.data += "\n";
   }
@@ -299,7 +389,8 @@ FigureSpec ParameterFigure(const std::string& name, const std::vector<std::strin
   body += "set xtics rotate by -40 nomirror font ',10'\nset ytics nomirror\n";
   body += "set xrange [-0.7:" + Num(static_cast<double>(points.size()) - 0.3) + "]\n";
   body += "set yrange [" + Num(low) + ":" + Num(high) + "]\n";
-  body += "set ylabel 'estimate / reference'\nset key top right\n";
+  // The key outside the frame: markers at the edges must not hide under it.
+  body += "set ylabel 'estimate / reference'\nset key outside right top vertical\n";
   body += "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 3 lc rgb '#888888'\n";
   if (points.empty()) {
     body += EmptyPanel("no essential parameters");

@@ -47,10 +47,17 @@ struct TimeMark {
 // Order of the panels: the components the paper draws first, then the lateral forces.
 inline constexpr int kPanelOrder[6] = {2, 3, 4, 5, 0, 1};
 
-// Figure (a): rows = wrench components, columns = parameter sets.
+// Figure (a): rows = wrench components, columns = parameter sets over the whole flight, and beside
+// them a zoom of `zoom_s` seconds (0: none) on the most excited stretch (MostExcitedWindow of the
+// first set) with the rigid body and every set's rotor model, where a lead or lag is visible.
 FigureSpec WrenchFigure(const std::string& name, const std::string& flight_label,
                         const std::vector<WrenchColumn>& columns, const std::vector<TimeMark>& marks,
-                        int max_points_per_series);
+                        int max_points_per_series, double zoom_s);
+
+// The window [start, start + length_s] of the flight in which the rotor wrench changes most (each
+// component's squared change normalised by its total over the flight, Fz, Mx, My, Mz summed); the
+// whole flight when it is shorter.
+std::pair<double, double> MostExcitedWindow(const WrenchSplit& split, double length_s);
 
 // Figure (b): residual amplitude spectra; one curve per parameter set (and series) per component.
 struct SpectrumCurve {

@@ -257,6 +257,10 @@ class HtmlReportTest : public ::testing::Test {
       ASSERT_TRUE(check.well_formed) << check.error;
       EXPECT_EQ(check.root, "svg");
       EXPECT_GE(check.paths, 20);
+      // Beside every full-length wrench plot, its zoom.
+      if (name.rfind("fig_wrench_", 0) == 0) {
+        EXPECT_EQ(CountOccurrences(ReadFile(dir_ + "/" + name), " s zoom at "), 6);
+      }
     }
   }
 
@@ -369,7 +373,7 @@ TEST_F(HtmlReportTest, DiagnoseReportGivesTheVerdictFirstAndTablesEqualToTheJson
     EXPECT_NEAR(CellNumber(ranking[k][3]), entry["shrink_pct"].get<double>(), 0.0051);
     if (entry["effect"] == "delay") {
       const double value_ms = 1e3 * entry["magnitude"]["delay_s"]["value"].get<double>();
-      EXPECT_NEAR(CellNumber(ranking[k][4].substr(ranking[k][4].find(' ') + 1)), value_ms, 1e-3 * value_ms);
+      EXPECT_NEAR(CellNumber(ranking[k][4].substr(ranking[k][4].find('\n') + 1)), value_ms, 1e-3 * value_ms);
       EXPECT_NE(ranking[k][4].find("ms"), std::string::npos);
     }
   }

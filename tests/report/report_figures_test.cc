@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <regex>
+#include <sstream>
 
 #include "report/gnuplot.h"
 #include "report/svg_check.h"
@@ -64,6 +65,62 @@ TEST(ParameterFigureTest, AnOutlierIsMarkedAtTheEdgeInsteadOfSquashingTheRest) {
   const testing::SvgCheck check = testing::CheckSvg(svg);
   ASSERT_TRUE(check.well_formed) << check.error;
   EXPECT_NE(svg.find(">33x<"), std::string::npos);
+}
+
+// 30 s at 100 Hz: a steady hover with one burst of fast moment changes at 12-15 s, and the
+// rigid body lagging the rotor model by 20 ms.
+WrenchSplit BurstFlight() {
+  const int n = 3000;
+  WrenchSplit split;
+  split.t_s = Eigen::VectorXd::LinSpaced(n, 0.0, 29.99);
+  split.rotor_model = Eigen::MatrixXd::Zero(n, 6);
+  split.rigid_body = Eigen::MatrixXd::Zero(n, 6);
+  auto moment = [](double t) {
+    return t > 12.0 && t < 15.0 ? 0.3 * std::sin(2.0 * M_PI * 2.0 * t) : 0.01 * std::sin(t);
+  };
+  for (int i = 0; i < n; ++i) {
+    const double t = split.t_s[i];
+    split.rotor_model(i, 2) = 15.0 + 0.05 * std::sin(0.5 * t);
+    split.rotor_model(i, 3) = moment(t);
+    split.rigid_body(i, 2) = split.rotor_model(i, 2);
+    split.rigid_body(i, 3) = moment(t - 0.02);
+  }
+  split.error = split.rigid_body - split.rotor_model;
+  split.relative_error_pct = {std::nullopt, std::nullopt, 0.1, 5.0, std::nullopt, std::nullopt};
+  return split;
+}
+
+TEST(WrenchFigureTest, TheZoomSitsOnTheMostExcitedStretchAndIsNotDecimated) {
+  const WrenchSplit split = BurstFlight();
+  const auto [start, end] = MostExcitedWindow(split, 5.0);
+  EXPECT_NEAR(end - start, 5.0, 1e-9);
+  EXPECT_LE(start, 12.0);
+  EXPECT_GE(end, 15.0);
+  // Shorter than the window: the whole flight.
+  WrenchSplit short_flight = split;
+  const auto [s0, s1] = MostExcitedWindow(short_flight, 60.0);
+  EXPECT_EQ(s0, 0.0);
+  EXPECT_NEAR(s1, 29.99, 1e-9);
+
+  const FigureSpec f = WrenchFigure("fig_wrench_1", "burst", {{"linear", split}}, {}, 200, 5.0);
+  EXPECT_NE(f.body.find("5 s zoom at"), std::string::npos);
+  // The full-length curves are decimated to 200 points; the zoom keeps all 500 samples of its window.
+  size_t longest_block = 0, current = 0;
+  std::istringstream lines(f.data);
+  for (std::string line; std::getline(lines, line);) {
+    current = line.empty() ? 0 : current + 1;
+    longest_block = std::max(longest_block, current);
+  }
+  EXPECT_GE(longest_block, 499u);
+  EXPECT_LE(longest_block, 501u);
+  EXPECT_EQ(WrenchFigure("fig_wrench_1", "burst", {{"linear", split}}, {}, 200, 0.0).body.find("zoom"),
+            std::string::npos);
+
+  const std::string svg = Render(f);
+  if (svg.empty()) GTEST_SKIP() << "gnuplot is not installed";
+  const testing::SvgCheck check = testing::CheckSvg(svg);
+  ASSERT_TRUE(check.well_formed) << check.error;
+  EXPECT_GE(check.max_path_vertices, 400);  // a zoomed curve drawn with every sample
 }
 
 }  // namespace

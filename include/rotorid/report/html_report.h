@@ -65,6 +65,8 @@ struct ReportOptions {
   double gnuplot_timeout_s = 60.0;
   // Most points drawn per time series (min/max per bucket keeps the envelope).
   int max_points_per_series = 1200;
+  // Length (s) of the zoomed window beside each full-length wrench plot (0: no zoom).
+  double zoom_window_s = 5.0;
   // Longest Welch segment (samples, a power of two) of the residual spectra.
   int max_spectrum_segment = 512;
   // Print the report's own warnings (gnuplot missing or failing) on stderr.

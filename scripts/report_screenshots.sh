@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Screenshots of the HTML reports as a browser shows them: runs identify, refine and diagnose on
+# the simulated flights bundled in data/sim (the commands of scripts/main_job.sh) into a temporary
+# folder, and takes headless Chromium screenshots of each report into docs/figures/
+# (report_identify.png, report_refine.png, report_diagnose.png). With the shared real flights
+# present (../shared/data/real), also the identify report of the brushed Crazyflie flight jana01
+# (report_real_identify.png).
+#
+#   scripts/report_screenshots.sh            # needs build/release/apps/rotorid (rotorid_cli), gnuplot, chromium
+#   ROTORID=path/to/rotorid OUT=dir scripts/report_screenshots.sh
+#
+# Each page is rendered 1280 px wide at a device scale of 0.6 (768 px wide PNGs, a few hundred KB)
+# and cut to the length given per report below.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+R=${ROTORID:-build/release/apps/rotorid}
+OUT=${OUT:-docs/figures}
+CHROMIUM=${CHROMIUM:-chromium}
+SCALE=${SCALE:-0.6}
+[ -x "$R" ] || { echo "report_screenshots.sh: $R not found; build the rotorid_cli target first" >&2; exit 1; }
+command -v "$CHROMIUM" > /dev/null || { echo "report_screenshots.sh: $CHROMIUM not found" >&2; exit 1; }
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+mkdir -p "$OUT"
+D=data/sim
+
+# shot NAME REPORT_DIR HEIGHT_PX: the top HEIGHT_PX (CSS pixels) of REPORT_DIR/report.html.
+shot() {
+  local name=$1 dir=$2 height=$3
+  "$CHROMIUM" --headless --disable-gpu --no-sandbox --hide-scrollbars --force-device-scale-factor="$SCALE" \
+    --screenshot="$OUT/$name.png" --window-size=1280,"$height" "file://$(realpath "$dir")/report.html" \
+    > "$TMP/chromium.log" 2>&1 || { cat "$TMP/chromium.log" >&2; exit 1; }
+  echo "$OUT/$name.png: $(du -k "$OUT/$name.png" | cut -f1) KB"
+}
+
+"$R" identify -q --vehicle $D/A.yaml --log $D/A_train.csv --vehicle $D/B.yaml --log $D/B_train.csv \
+  --weight 1 --weight 2 --report "$TMP/identify"
+shot report_identify "$TMP/identify" 2800
+
+"$R" refine -q --vehicle $D/A.yaml --log $D/A_train.csv --vehicle $D/B.yaml --log $D/B_train.csv \
+  --weight 1 --weight 2 --validate-vehicle $D/A.yaml --validate-log $D/A_val.csv \
+  --validate-vehicle $D/B.yaml --validate-log $D/B_val.csv --report "$TMP/refine"
+shot report_refine "$TMP/refine" 3150
+
+"$R" diagnose -q --vehicle $D/B.yaml --log $D/B_train.csv --validate-vehicle $D/B.yaml \
+  --validate-log $D/B_val.csv --report "$TMP/diagnose"
+shot report_diagnose "$TMP/diagnose" 5400
+
+REAL=../shared/data/real/crazyflie-imrc-rpm/brushed/raw/jana01
+if [ -e "$REAL" ]; then
+  "$R" identify -q --vehicle data/vehicles/crazyflie21_brushed.yaml --log "$REAL" --allow-partial \
+    --report "$TMP/real"
+  shot report_real_identify "$TMP/real" 3600
+fi
