@@ -1,11 +1,15 @@
+#include "rotorid/refine/ablate.h"
+
+#include <algorithm>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
-#include "rotorid/refine/ablate.h"
+#include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/progress.h"
 #include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
@@ -17,6 +21,17 @@ std::string SubsetName(const std::vector<EffectKind>& effects) {
   std::string name;
   for (EffectKind k : effects) name += (name.empty() ? "" : "+") + std::string(EffectName(k));
   return name;
+}
+
+// The report's parameter table: the linear result and the subset with the lowest BIC.
+std::vector<ParameterSet> AblationParameterSets(const IdentificationResult& linear, const AblationResult& ablation) {
+  std::vector<ParameterSet> sets = {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()}};
+  const auto best = std::min_element(ablation.entries.begin(), ablation.entries.end(),
+                                     [](const AblationEntry& a, const AblationEntry& b) { return a.bic < b.bic; });
+  if (best != ablation.entries.end())
+    sets.push_back({"lowest BIC: " + SubsetName(best->effects),
+                    NamedParameters(linear.system, best->result.refined.chi), best->result.effects});
+  return sets;
 }
 
 }  // namespace
@@ -48,7 +63,10 @@ Command AddAblateCommand(CLI::App& root) {
     const IdentificationResult linear = Identify(training.flights, identify);
     std::vector<ProcessedFlight> held_out;
     if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, identify.observation);
-    const AblationResult ablation = Ablate(linear, held_out, effects, options->refine, options->threads);
+    Progress progress("ablate", int64_t{1} << effects.size(), options->flights.quiet);
+    const AblationResult ablation = Ablate(linear, held_out, effects, options->refine, options->threads,
+                                           [&progress](int done, int) { progress.Update(done); });
+    progress.Finish();
 
     nlohmann::json rows = nlohmann::json::array();
     for (const AblationEntry& e : ablation.entries) {
@@ -76,6 +94,9 @@ Command AddAblateCommand(CLI::App& root) {
         {"ablation", rows}};
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    const std::string report_path =
+        WriteCommandReport(options->flights, "rotorid ablate", report, ReportFlights(linear.flights, false),
+                           AblationParameterSets(linear, ablation));
     if (!options->flights.quiet) {
       std::cout << "rotorid ablate: " << ablation.entries.size() << " subsets of " << options->effects << "\n";
       std::cout << std::left << std::setw(46) << "effects" << std::right << std::setw(4) << "k" << std::setw(11)
@@ -88,6 +109,7 @@ Command AddAblateCommand(CLI::App& root) {
         std::cout << "\n";
       }
       std::cout.unsetf(std::ios::floatfield);
+      if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
     return 0;
   };

@@ -15,6 +15,7 @@
 #include "rotorid/ident/tls.h"
 #include "rotorid/io/flight_selection.h"
 #include "rotorid/io/flight_source.h"
+#include "rotorid/report/html_report.h"
 
 namespace rotorid::cli {
 
@@ -81,6 +82,10 @@ void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training,
 void AddConfigOption(CLI::App* app);
 nlohmann::json ConfigJson(const CLI::App& app);
 
+// Writes the HTML report of --report (when given) and returns its path ("" without --report).
+std::string WriteCommandReport(const FlightOptions& options, const std::string& title, const nlohmann::json& report,
+                               std::vector<ReportFlight> flights, std::vector<ParameterSet> parameter_sets);
+
 // A mistake on the command line (exit code 2, INTERFACE.md 4). rotorid::Error thrown while a
 // command still validates its options counts as one too: see MarkOptionsValidated.
 class UsageError : public std::runtime_error {
@@ -107,6 +112,20 @@ Command AddDiagnoseCommand(CLI::App& root);
 Command AddVehicleCommand(CLI::App& root);
 Command AddExportCommand(CLI::App& root);
 Command AddBatchCommand(CLI::App& root);
+
+// A CLI11 check (empty when valid, else the message) from a parser that throws rotorid::Error, so
+// that a bad value is a usage error found while parsing.
+template <class Parse>
+std::function<std::string(const std::string&)> ParsesWith(Parse parse) {
+  return [parse](const std::string& text) -> std::string {
+    try {
+      parse(text);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return {};
+  };
+}
 
 // Output-path and effect-list checks at parse time, and --config, on every command.
 void ApplyConventions(const std::vector<Command>& commands);

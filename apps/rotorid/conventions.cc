@@ -33,15 +33,6 @@ std::string CheckOutputFolder(const std::string& path) {
   return {};
 }
 
-std::string CheckEffectList(const std::string& list) {
-  try {
-    ParseEffectList(list);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return {};
-}
-
 }  // namespace
 
 void ApplyConventions(const std::vector<Command>& commands) {
@@ -49,7 +40,7 @@ void ApplyConventions(const std::vector<Command>& commands) {
     for (const char* name : {"--json", "--out", "--truth", "--vehicle-out"})
       if (CLI::Option* option = command.app->get_option_no_throw(name)) option->check(CheckOutputFile);
     if (CLI::Option* option = command.app->get_option_no_throw("--report")) option->check(CheckOutputFolder);
-    if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(CheckEffectList);
+    if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(ParsesWith(ParseEffectList));
     AddConfigOption(command.app);
   }
 }

@@ -1,10 +1,12 @@
+#include "rotorid/refine/delay.h"
+
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
-#include "rotorid/refine/delay.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/progress.h"
 #include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
@@ -34,7 +36,10 @@ Command AddDelayCommand(CLI::App& root) {
     identify.allow_partial = true;
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
     const IdentificationResult linear = Identify(loaded.flights, identify);
+    Progress progress("delay: search and refinement", 0, options->flights.quiet);
+    progress.StartTicking();
     const DelayEstimate estimate = EstimateDelay(linear, options->delay);
+    progress.Finish();
     nlohmann::json curve = nlohmann::json::array();
     for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
@@ -55,6 +60,10 @@ Command AddDelayCommand(CLI::App& root) {
                              {"warnings", estimate.warnings}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
+    const std::string report_path = WriteCommandReport(
+        options->flights, "rotorid delay", report, ReportFlights(linear.flights, false),
+        {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
+         {"with the delay", NamedParameters(linear.system, estimate.refined.refined.chi), estimate.refined.effects}});
     if (!options->flights.quiet) {
       std::cout << "rotorid delay: " << 1000 * estimate.delay_s << " ms +- " << 1000 * estimate.delay_std_s
                 << " ms (global search best " << 1000 * estimate.grid_best_s << " ms over ["
@@ -64,6 +73,7 @@ Command AddDelayCommand(CLI::App& root) {
                   << 1000 * estimate.motor_tau_std_s << " ms";
       std::cout << "\n";
       PrintWarnings(estimate.warnings);
+      if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
     return 0;
   };

@@ -15,16 +15,6 @@ namespace {
 
 bool options_validated = false;
 
-// --window values are checked while parsing, so that a bad one is a usage error.
-std::string CheckWindow(const std::string& text) {
-  try {
-    ParseTimeWindow(text);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return {};
-}
-
 }  // namespace
 
 void MarkOptionsValidated() { options_validated = true; }
@@ -42,7 +32,7 @@ void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out) {
                   "weight of each --vehicle/--log pair (default 1; the paper uses 2 for B)");
   app->add_option("--window", options->windows,
                   "START,END: seconds of the log's own time base to use, paired in order with --log")
-      ->check(CheckWindow);
+      ->check(ParsesWith(ParseTimeWindow));
   if (held_out) {
     app->add_option("--validate-vehicle", options->validate_vehicle_paths, "vehicle file of a held-out flight")
         ->check(CLI::ExistingFile);
@@ -50,7 +40,7 @@ void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out) {
                     "held-out flight log, paired with --validate-vehicle")
         ->check(CLI::ExistingFile);
     app->add_option("--validate-window", options->validate_windows, "START,END of each --validate-log, in order")
-        ->check(CheckWindow);
+        ->check(ParsesWith(ParseTimeWindow));
   }
   app->add_option("--segment", options->segment,
                   "auto: keep only the airborne, unsaturated stretches of each log; none: the whole log (or window)")
@@ -158,6 +148,19 @@ void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training,
                              nlohmann::json* report) {
   (*report)["input"] = InputJson(training.inputs, held_out ? held_out->inputs : std::vector<FlightInputSummary>{});
   if (const nlohmann::json config = ConfigJson(app); !config.is_null()) (*report)["config"] = config;
+}
+
+std::string WriteCommandReport(const FlightOptions& options, const std::string& title, const nlohmann::json& report,
+                               std::vector<ReportFlight> flights, std::vector<ParameterSet> parameter_sets) {
+  if (options.report_dir.empty()) return {};
+  ReportInput input;
+  input.title = title;
+  input.report = report;
+  input.flights = std::move(flights);
+  input.parameter_sets = std::move(parameter_sets);
+  ReportOptions report_options;
+  report_options.print_warnings = !options.quiet;
+  return WriteHtmlReport(options.report_dir, input, report_options).html_path;
 }
 
 std::string FormatComponents(const std::vector<std::optional<double>>& values) {

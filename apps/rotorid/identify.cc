@@ -34,17 +34,9 @@ Command AddIdentifyCommand(CLI::App& root) {
         {"linear", LinearJson(result)}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    std::string report_path;
-    if (!options->flights.report_dir.empty()) {
-      ReportInput input;
-      input.title = "rotorid identify";
-      input.report = report;
-      input.flights = ReportFlights(result.flights, /*held_out=*/false);
-      input.parameter_sets = {{"linear", NamedParameters(result.system, result.solution.chi), Effects()}};
-      ReportOptions report_options;
-      report_options.print_warnings = !options->flights.quiet;
-      report_path = WriteHtmlReport(options->flights.report_dir, input, report_options).html_path;
-    }
+    const std::string report_path =
+        WriteCommandReport(options->flights, "rotorid identify", report, ReportFlights(result.flights, false),
+                           {{"linear", NamedParameters(result.system, result.solution.chi), Effects()}});
     if (!options->flights.quiet) {
       std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "
                 << DataSourceName(identify.observation.source) << " data, " << flights.size() << " flight(s), "

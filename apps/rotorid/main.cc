@@ -32,7 +32,8 @@ int main(int argc, char** argv) {
   using namespace rotorid::cli;
   const std::vector<Command> commands = {AddSimulateCommand(root), AddIdentifyCommand(root), AddValidateCommand(root),
                                          AddRefineCommand(root),   AddDelayCommand(root),    AddAblateCommand(root),
-                                         AddDiagnoseCommand(root)};
+                                         AddDiagnoseCommand(root), AddVehicleCommand(root),  AddExportCommand(root),
+                                         AddBatchCommand(root)};
   ApplyConventions(commands);
   if (const std::string unknown = UnknownSubcommand(root, argc, argv); !unknown.empty())
     return UsageFailure(unknown, "run 'rotorid --help' for the subcommands");

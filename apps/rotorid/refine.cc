@@ -1,14 +1,16 @@
-#include <cmath>
+#include "rotorid/refine/refine.h"
+
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
-#include "rotorid/refine/refine.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/progress.h"
 #include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
@@ -92,7 +94,10 @@ Command AddRefineCommand(CLI::App& root) {
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
     const IdentificationResult linear = Identify(training.flights, identify);
+    Progress progress("refine: Ceres", 0, options->flights.quiet);
+    progress.StartTicking();
     const RefineResult refined = Refine(linear, refine);
+    progress.Finish();
 
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},

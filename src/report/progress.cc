@@ -49,11 +49,29 @@ void Progress::Update(int64_t done) {
   Draw(last_done_, false);
 }
 
+void Progress::StartTicking(std::chrono::milliseconds interval) {
+  if (!enabled_ || ticker_.joinable()) return;
+  ticker_ = std::thread([this, interval] {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!finished_) {
+      if (stop_ticking_.wait_for(lock, interval, [this] { return finished_; })) break;
+      last_draw_ = std::chrono::steady_clock::now();
+      Draw(last_done_, false);
+    }
+  });
+}
+
 void Progress::Finish() {
   if (!enabled_) return;
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::mutex> lock(mutex_);
   if (finished_) return;
   finished_ = true;
+  if (ticker_.joinable()) {
+    stop_ticking_.notify_all();
+    lock.unlock();
+    ticker_.join();
+    lock.lock();
+  }
   // Only a line that was started needs its final state; short work stays silent.
   if (drawn_) Draw(total_ > 0 ? std::max(last_done_, total_) : last_done_, true);
 }
@@ -73,7 +91,10 @@ void Progress::Draw(int64_t done, bool final_line) {
       std::snprintf(numbers + used, sizeof(numbers) - used, ", ~%.0f s left", elapsed_s * (1.0 - fraction) / fraction);
     }
   } else {
-    std::snprintf(numbers, sizeof(numbers), "%lld done, %.1f s", static_cast<long long>(done), elapsed_s);
+    if (done > 0)
+      std::snprintf(numbers, sizeof(numbers), "%lld done, %.1f s", static_cast<long long>(done), elapsed_s);
+    else
+      std::snprintf(numbers, sizeof(numbers), final_line ? "done in %.1f s" : "running, %.1f s", elapsed_s);
   }
   line += numbers;
   // Clear what a longer previous line left behind.

@@ -131,6 +131,22 @@ TEST_F(CliWorkflowTest, EveryReportHasInputFlights) {
   EXPECT_NEAR(refine["input"]["validate_flights"][0]["used_s"].get<double>(), 10.0, 0.01);
 }
 
+TEST_F(CliWorkflowTest, AblateAndDelayWriteTheirReports) {
+  for (const std::string command : {"ablate", "delay"}) {
+    const std::string folder = Path("report_" + command);
+    auto args = Args({command, "--report", folder, "--json", Path(command + ".json")});
+    if (command == "ablate") args.insert(args.end(), {"--effects", "delay,motor_lag"});
+    const auto r = RunRotorid(args);
+    ASSERT_EQ(r.exit_code, 0) << command << ": " << r.err;
+    EXPECT_NE(r.out.find("report: " + folder + "/report.html"), std::string::npos) << r.out;
+    const std::string html = Slurp(folder + "/report.html");
+    EXPECT_NE(html.find("rotorid " + command), std::string::npos) << command;
+    // Progress goes to terminals only: none in a file.
+    EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+  }
+  EXPECT_NE(Slurp(Path("report_ablate") + "/report.html").find("lowest BIC"), std::string::npos);
+}
+
 // The ARPL Crazyflie logs (../shared/data/real/crazyflie-arpl-sysid/SOURCE.md): raw they cannot be
 // identified; cut to the source's window, or segmented automatically, they can.
 TEST(CliWorkflowRealTest, ArplCrazyflieWindowsAndSegmentsMakeRawLogsUsable) {

@@ -120,5 +120,22 @@ TEST_F(TerminalTest, SafeFromSeveralThreads) {
   EXPECT_NE(ReadAll(master_).find("diagnose"), std::string::npos);
 }
 
+TEST_F(TerminalTest, TicksWithoutUpdatesAndEndsItsLine) {
+  Progress progress("refine: Ceres", 0, /*quiet=*/false, terminal_);
+  progress.StartTicking(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  progress.Finish();
+  const std::string shown = ReadAll(master_);
+  int draws = 0;
+  for (char c : shown) draws += c == '\r';
+  EXPECT_GE(draws, 3) << shown;  // about 7 ticks and the final line
+  EXPECT_NE(shown.find("refine: Ceres running, "), std::string::npos) << shown;
+  EXPECT_NE(shown.find("refine: Ceres done in "), std::string::npos) << shown;
+  EXPECT_EQ(shown.back(), '\n');
+  // Nothing after Finish.
+  std::this_thread::sleep_for(std::chrono::milliseconds(60));
+  EXPECT_EQ(ReadAll(master_), "");
+}
+
 }  // namespace
 }  // namespace rotorid

@@ -12,9 +12,11 @@
 //   progress.Finish();  // or let the destructor do it
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <thread>
 
 namespace rotorid {
 
@@ -30,6 +32,9 @@ class Progress {
 
   // Reports that `done` units are finished. Thread-safe; cheap when nothing is drawn.
   void Update(int64_t done);
+  // Redraws on its own every `interval` until Finish, for work that reports no steps (a single
+  // solver run): the line then shows the elapsed time. Nothing happens when nothing is drawn.
+  void StartTicking(std::chrono::milliseconds interval = std::chrono::milliseconds(250));
   // Draws the final state and ends the line (once; later calls do nothing).
   void Finish();
   // Whether anything is drawn at all.
@@ -48,6 +53,8 @@ class Progress {
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
   std::mutex mutex_;
+  std::condition_variable stop_ticking_;
+  std::thread ticker_;
 };
 
 }  // namespace rotorid
