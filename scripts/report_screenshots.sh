@@ -35,12 +35,12 @@ shot() {
 
 "$R" identify -q --vehicle $D/A.yaml --log $D/A_train.csv --vehicle $D/B.yaml --log $D/B_train.csv \
   --weight 1 --weight 2 --report "$TMP/identify"
-shot report_identify "$TMP/identify" 2800
+shot report_identify "$TMP/identify" 3300
 
 "$R" refine -q --vehicle $D/A.yaml --log $D/A_train.csv --vehicle $D/B.yaml --log $D/B_train.csv \
   --weight 1 --weight 2 --validate-vehicle $D/A.yaml --validate-log $D/A_val.csv \
   --validate-vehicle $D/B.yaml --validate-log $D/B_val.csv --report "$TMP/refine"
-shot report_refine "$TMP/refine" 3150
+shot report_refine "$TMP/refine" 3700
 
 "$R" diagnose -q --vehicle $D/B.yaml --log $D/B_train.csv --validate-vehicle $D/B.yaml \
   --validate-log $D/B_val.csv --report "$TMP/diagnose"

@@ -77,9 +77,9 @@ LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSo
 void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training, const LoadedFlights* held_out,
                              nlohmann::json* report);
 
-// --config FILE.yaml on a subcommand (apps/rotorid/config.cc), and the file's options for the
-// report (null when no file was given).
-void AddConfigOption(CLI::App* app);
+// --config FILE.yaml (apps/rotorid/config.cc), on the root once every subcommand is registered,
+// and the file's options for the report of `app` (null when no file was given).
+void AddConfigOption(CLI::App* root);
 nlohmann::json ConfigJson(const CLI::App& app);
 
 // Writes the HTML report of --report (when given) and returns its path ("" without --report).

@@ -18,8 +18,12 @@ namespace rotorid::cli {
 
 namespace {
 
+// The file belongs to the root (CLI11 reads config files of the root only); its keys are the
+// options of the subcommand on the command line.
 class YamlConfig : public CLI::Config {
  public:
+  explicit YamlConfig(const CLI::App* root) : root_(root) {}
+
   // Writing a config file is not offered (--help lists the keys).
   std::string to_config(const CLI::App*, bool, bool, std::string) const override { return {}; }
 
@@ -49,10 +53,15 @@ class YamlConfig : public CLI::Config {
       } else {
         throw CLI::ConfigError("--config: '" + item.name + "' must be a value or a list of values");
       }
+      const std::vector<CLI::App*> parsed = root_->get_subcommands();
+      if (!parsed.empty()) item.parents = {parsed.front()->get_name()};
       items.push_back(std::move(item));
     }
     return items;
   }
+
+ private:
+  const CLI::App* root_;
 };
 
 nlohmann::json ScalarJson(const YAML::Node& node) {
@@ -81,15 +90,21 @@ nlohmann::json YamlJson(const YAML::Node& node) {
 
 }  // namespace
 
-void AddConfigOption(CLI::App* app) {
-  app->set_config("--config", "", "YAML file of options (keys: the long option names; lists for repeatable ones)")
+void AddConfigOption(CLI::App* root) {
+  root->set_config("--config", "",
+                   "YAML file of the subcommand's options (keys: the long option names; lists for repeatable ones); "
+                   "may follow the subcommand")
       ->check(CLI::ExistingFile);
-  app->config_formatter(std::make_shared<YamlConfig>());
-  app->allow_config_extras(CLI::config_extras_mode::error);
+  root->config_formatter(std::make_shared<YamlConfig>(root));
+  root->allow_config_extras(CLI::config_extras_mode::error);
+  // `rotorid identify --config FILE`: the subcommand passes the option it does not know to the root.
+  for (CLI::App* sub : root->get_subcommands({})) sub->fallthrough();
 }
 
 nlohmann::json ConfigJson(const CLI::App& app) {
-  const CLI::Option* option = app.get_config_ptr();
+  const CLI::App* owner = &app;
+  while (owner != nullptr && owner->get_config_ptr() == nullptr) owner = owner->get_parent();
+  const CLI::Option* option = owner ? owner->get_config_ptr() : nullptr;
   if (option == nullptr || option->count() == 0) return nullptr;
   const std::string path = option->as<std::string>();
   try {

@@ -41,7 +41,6 @@ void ApplyConventions(const std::vector<Command>& commands) {
       if (CLI::Option* option = command.app->get_option_no_throw(name)) option->check(CheckOutputFile);
     if (CLI::Option* option = command.app->get_option_no_throw("--report")) option->check(CheckOutputFolder);
     if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(ParsesWith(ParseEffectList));
-    AddConfigOption(command.app);
   }
 }
 

@@ -5,6 +5,7 @@
 #include "rotorid/refine/refine.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/progress.h"
 
 namespace rotorid::cli {
 
@@ -25,7 +26,11 @@ Command AddIdentifyCommand(CLI::App& root) {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
     const std::vector<FlightData>& flights = loaded.flights;
+    // Long logs take seconds: an elapsed-time line on a terminal (nothing drawn for short work).
+    Progress progress("identify", 0, options->flights.quiet);
+    progress.StartTicking();
     const IdentificationResult result = Identify(flights, identify);
+    progress.Finish();
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},
         {"command", "identify"},

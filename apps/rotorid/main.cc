@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
                                          AddDiagnoseCommand(root), AddVehicleCommand(root),  AddExportCommand(root),
                                          AddBatchCommand(root)};
   ApplyConventions(commands);
+  AddConfigOption(&root);
   if (const std::string unknown = UnknownSubcommand(root, argc, argv); !unknown.empty())
     return UsageFailure(unknown, "run 'rotorid --help' for the subcommands");
   try {

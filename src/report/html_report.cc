@@ -525,18 +525,24 @@ std::string ReportBuilder::FlightsSection() const {
 
 std::string ReportBuilder::InputFlightsTable() const {
   if (!root_.Has("input")) return "";
-  const std::vector<JsonNode> flights = root_["input"]["flights"].Elements();
+  const JsonNode input = root_["input"];
+  // Identification flights, then the held-out ones when the command had any.
+  std::vector<std::pair<std::string, JsonNode>> flights;
+  for (const JsonNode& f : input["flights"].Elements()) flights.emplace_back("identification", f);
+  if (input.Has("validate_flights"))
+    for (const JsonNode& f : input["validate_flights"].Elements()) flights.emplace_back("held-out", f);
   // The columns are what the command recorded per log (INTERFACE.md: file, format, span, rates,
   // rotor signal, columns or topics, segments).
   std::vector<std::string> keys;
-  for (const JsonNode& f : flights)
+  for (const auto& [role, f] : flights)
     for (const auto& [key, value] : f.Items())
       if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
-  std::string html = "<h3>What was read</h3>\n<div class=\"scroll\"><table id=\"input_flights\"><thead><tr>";
+  std::string html =
+      "<h3>What was read</h3>\n<div class=\"scroll\"><table id=\"input_flights\"><thead><tr><th>role</th>";
   for (const std::string& key : keys) html += "<th>" + Html(key) + "</th>";
   html += "</tr></thead><tbody>\n";
-  for (const JsonNode& f : flights) {
-    html += "<tr>";
+  for (const auto& [role, f] : flights) {
+    html += "<tr><td>" + role + "</td>";
     for (const std::string& key : keys)
       html += "<td class=\"small\">" + (f.json().contains(key) ? InputCell(f.json()[key]) : "&ndash;") + "</td>";
     html += "</tr>\n";

@@ -147,6 +147,30 @@ TEST_F(CliWorkflowTest, AblateAndDelayWriteTheirReports) {
   EXPECT_NE(Slurp(Path("report_ablate") + "/report.html").find("lowest BIC"), std::string::npos);
 }
 
+TEST_F(CliWorkflowTest, ConfigFileGivesOptionsAndIsRecorded) {
+  std::ofstream(Path("run.yaml")) << "vehicle: [" << Path("B.yaml") << "]\nlog: [" << Path("f.csv")
+                                  << "]\nwindow: [\"2,18\"]\ncutoff-hz: 8\nsegment: none\nall-parameters: true\n";
+  const auto r =
+      RunRotorid({"identify", "--config", Path("run.yaml"), "--edge-trim-s", "0.25", "--json", Path("c.json")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = LoadJson(Path("c.json"));
+  EXPECT_EQ(report["settings"]["observation"]["filter"]["cutoff_hz"].get<double>(), 8.0);
+  EXPECT_EQ(report["settings"]["observation"]["edge_trim_s"].get<double>(), 0.25);
+  EXPECT_NEAR(report["input"]["flights"][0]["used_s"].get<double>(), 16.0, 0.01);
+  EXPECT_EQ(report["config"]["file"], Path("run.yaml"));
+  EXPECT_EQ(report["config"]["options"]["cutoff-hz"], 8.0);
+  for (const auto& [name, entry] : report["linear"]["parameters"].items()) EXPECT_TRUE(entry["essential"]) << name;
+
+  // The command line wins over the file.
+  const auto wins =
+      RunRotorid({"identify", "--config", Path("run.yaml"), "--cutoff-hz", "6", "--json", Path("c6.json")});
+  ASSERT_EQ(wins.exit_code, 0) << wins.err;
+  EXPECT_EQ(LoadJson(Path("c6.json"))["settings"]["observation"]["filter"]["cutoff_hz"].get<double>(), 6.0);
+
+  std::ofstream(Path("bad.yaml")) << "cutof-hz: 8\n";
+  ExpectUsageError(RunRotorid(Args({"identify", "--config", Path("bad.yaml")})), "cutof-hz");
+}
+
 // The ARPL Crazyflie logs (../shared/data/real/crazyflie-arpl-sysid/SOURCE.md): raw they cannot be
 // identified; cut to the source's window, or segmented automatically, they can.
 TEST(CliWorkflowRealTest, ArplCrazyflieWindowsAndSegmentsMakeRawLogsUsable) {

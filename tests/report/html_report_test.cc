@@ -465,6 +465,7 @@ TEST_F(HtmlReportTest, ChecksComeFirstWhenOneFailsAndWhatWasReadIsTabulated) {
                               {"span_s", {0.0, 30.0}},
                               {"rotor_signal", "rpm"},
                               {"segments", {{{"start_s", 0.0}, {"end_s", 30.0}, {"reason", "kept"}}}}}}}};
+  input.report["input"]["validate_flights"] = {{{"file", "B_val.csv"}}};
   std::string html = Write(input);
   ASSERT_NE(html.find("id=\"checks\""), std::string::npos);
   EXPECT_LT(html.find("id=\"checks\""), html.find("id=\"flights\""));
@@ -474,8 +475,12 @@ TEST_F(HtmlReportTest, ChecksComeFirstWhenOneFailsAndWhatWasReadIsTabulated) {
   EXPECT_EQ(checks[1][1], "error");
   EXPECT_EQ(checks[1][2], "rotors 1 and 2 swapped");
   const auto read = TableCells(html, "input_flights");
-  ASSERT_EQ(read.size(), 1u);
-  EXPECT_EQ(read[0][0], "B_train.csv");
+  ASSERT_EQ(read.size(), 2u);
+  EXPECT_EQ(read[1][0], "held-out");
+  EXPECT_EQ(read[1][1], "B_val.csv");
+  EXPECT_EQ(read[1][2], "-");  // a key only the other flight has
+  EXPECT_EQ(read[0][0], "identification");
+  EXPECT_EQ(read[0][1], "B_train.csv");
   EXPECT_NE(std::find(read[0].begin(), read[0].end(), "0, 30"), read[0].end());
   // All checks passing: the section moves to the end.
   input.report["checks"][1]["status"] = "ok";
