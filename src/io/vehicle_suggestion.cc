@@ -2,6 +2,7 @@
 
 #include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
+#include "rotorid/io/blackbox_flight.h"
 #include "rotorid/io/column_map.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/io/px4_flight.h"
@@ -46,11 +47,12 @@ Vehicle CrazyflieLayout(const std::string& name) {
   return vehicle;
 }
 
-VehicleSuggestion SuggestVehicle(const std::string& log_path, const std::string& column_map_path, double mass_kg,
-                                 const std::string& name) {
-  if (!(mass_kg > 0.0)) throw Error("the mass must be positive (kg, from a scale)");
+VehicleSuggestion SuggestVehicle(const std::string& log_path, const VehicleSuggestionOptions& options) {
+  if (!(options.mass_kg > 0.0)) throw Error("the mass must be positive (kg, from a scale)");
+  const std::string& name = options.name;
+  const std::string& column_map_path = options.column_map_path;
   VehicleSuggestion suggestion;
-  // One branch per log format; a new reader (e.g. a Betaflight blackbox header) adds its own.
+  // One branch per log format.
   switch (DetectLogFormat(log_path)) {
     case LogFormat::kULog:
       suggestion.vehicle = SuggestVehicleFromPx4Parameters(ReadULog(log_path), name);
@@ -60,6 +62,17 @@ VehicleSuggestion SuggestVehicle(const std::string& log_path, const std::string&
       suggestion.vehicle = CrazyflieLayout(name);
       suggestion.source = log_path + ": Crazyflie micro-SD log, the Crazyflie 2.x layout (92 mm diagonal)";
       break;
+    case LogFormat::kBlackbox: {
+      QuadXGeometry geometry;
+      geometry.arm_length_m = options.arm_length_m;
+      geometry.mass_kg = options.mass_kg;
+      geometry.props_out = options.props_out;
+      const std::vector<BlackboxLog> logs = ReadBlackboxFile(log_path);
+      suggestion.vehicle = SuggestVehicleFromBlackboxHeader(SelectBlackboxLog(logs, log_path), geometry, name);
+      suggestion.source = log_path + ": blackbox header (Quad-X, Betaflight motor order), arm " +
+                          std::to_string(options.arm_length_m) + " m given on the command line";
+      break;
+    }
     case LogFormat::kCsv:
       if (column_map_path.empty())
         throw Error(log_path +
@@ -69,7 +82,7 @@ VehicleSuggestion SuggestVehicle(const std::string& log_path, const std::string&
       suggestion.source = column_map_path + ": the column map's metadata";
       break;
   }
-  suggestion.vehicle.mass_kg = mass_kg;
+  suggestion.vehicle.mass_kg = options.mass_kg;
   if (const std::string problem = suggestion.vehicle.Validate(); !problem.empty())
     throw Error(log_path + ": the suggested vehicle is not valid: " + problem);
   return suggestion;

@@ -6,6 +6,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstdio>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -177,6 +178,29 @@ TEST(CliVehicleTest, FromPx4CrazyflieAndColumnMap) {
   EXPECT_EQ(plain.exit_code, 1);
   EXPECT_NE(plain.err.find("log.csv"), std::string::npos) << plain.err;
   EXPECT_EQ(RunRotorid({"vehicle", "--log", dir + "/log.csv", "--mass", "-1", "--out", dir + "/x.yaml"}).exit_code, 2);
+}
+
+TEST(CliVehicleTest, FromBlackboxHeaderWithTheArmLength) {
+  const auto log = testing::SharedDataPath("real/betaflight-fcblackbox-gecko/raw/btfl_002.bbl");
+  if (!log) GTEST_SKIP() << "no Betaflight log under ../shared/data/real";
+  const std::string dir = MakeTempDir("rotorid-vehicle-bbl");
+  // The header says Quad-X with 4 motors but not the geometry: the command asks for it.
+  const auto no_arm = RunRotorid({"vehicle", "--log", *log, "--mass", "0.6", "--out", dir + "/q.yaml"});
+  EXPECT_EQ(no_arm.exit_code, 1);
+  EXPECT_NE(no_arm.err.find("arm"), std::string::npos) << no_arm.err;
+  const auto r = RunRotorid({"vehicle", "--log", *log, "--mass", "0.6", "--arm-length", "0.1", "--out", dir + "/q.yaml"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Vehicle v = ReadVehicleYaml(dir + "/q.yaml");
+  ASSERT_EQ(v.num_rotors(), 4);
+  EXPECT_DOUBLE_EQ(v.mass_kg, 0.6);
+  // Betaflight's motor order: rear-right, front-right, rear-left, front-left, hubs at 45 degrees.
+  const double d = 0.1 / std::sqrt(2.0);
+  EXPECT_NEAR(v.rotors[0].position_m.x(), -d, 1e-9);
+  EXPECT_NEAR(v.rotors[0].position_m.y(), -d, 1e-9);
+  EXPECT_NEAR(v.rotors[3].position_m.x(), d, 1e-9);
+  EXPECT_NEAR(v.rotors[3].position_m.y(), d, 1e-9);
+  EXPECT_EQ(v.rotors[0].spin, -v.rotors[1].spin);
+  EXPECT_EQ(v.rotors[0].spin, v.rotors[3].spin);
 }
 
 }  // namespace
