@@ -5,6 +5,8 @@
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/refine/ablate.h"
+#include "rotorid/refine/refine_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 
@@ -43,7 +45,9 @@ Command AddAblateCommand(CLI::App& root) {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const std::vector<EffectKind> effects = ParseEffectList(options->effects);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const IdentificationResult linear = Identify(LoadTrainingFlights(options->flights, source), identify);
+    std::vector<Check> checks;
+    const IdentificationResult linear =
+        IdentifyWithChecks(LoadTrainingFlights(options->flights, source), identify, &checks);
     std::vector<ProcessedFlight> held_out;
     if (!options->flights.validate_log_paths.empty())
       held_out = ProcessFlights(LoadValidationFlights(options->flights, source), identify.observation);
@@ -64,6 +68,9 @@ Command AddAblateCommand(CLI::App& root) {
                             {"effects_values", EffectsJson(e.result.effects, e.result.effects_std, e.effects)}};
       if (!held_out.empty()) row["held_out_relative_error_pct"] = ComponentsJson(e.held_out_relative_error_pct);
       rows.push_back(row);
+      // Each subset's failed checks (the passing ones would repeat for every subset).
+      for (Check& c : CheckRefinement(linear, e.result, options->refine, SubsetName(e.effects)))
+        if (c.status != CheckStatus::kOk) checks.push_back(std::move(c));
     }
     if (!options->flights.json_path.empty()) {
       WriteJsonFile(options->flights.json_path, {{"rotorid_version", kRotoridVersion},
@@ -72,7 +79,8 @@ Command AddAblateCommand(CLI::App& root) {
                                                                {"tls", TlsOptionsJson(identify.tls)}}},
                                                  {"effective_samples", ablation.effective_samples},
                                                  {"linear", LinearJson(linear)},
-                                                 {"ablation", rows}});
+                                                 {"ablation", rows},
+                                                 {"checks", ChecksJson(checks)}});
     }
     if (!options->flights.quiet) {
       std::cout << "rotorid ablate: " << ablation.entries.size() << " subsets of " << options->effects << "\n";
@@ -87,7 +95,7 @@ Command AddAblateCommand(CLI::App& root) {
       }
       std::cout.unsetf(std::ios::floatfield);
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

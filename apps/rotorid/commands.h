@@ -10,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "rotorid/ident/checks.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/io/flight_source.h"
@@ -65,6 +66,9 @@ std::vector<FlightData> LoadValidationFlights(const FlightOptions& options, cons
 std::string FormatComponents(const std::vector<std::optional<double>>& values);
 void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution);
 void PrintWarnings(const std::vector<std::string>& warnings);
+// Prints the checks that did not pass (errors even under --quiet) and a summary line; returns the
+// exit code they call for: 3 when a check has status error, else 0.
+int PrintChecks(const std::vector<Check>& checks, bool quiet);
 
 Command AddSimulateCommand(CLI::App& root);
 Command AddIdentifyCommand(CLI::App& root);

@@ -4,6 +4,8 @@
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/refine/delay.h"
+#include "rotorid/refine/refine_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 
@@ -32,9 +34,11 @@ Command AddDelayCommand(CLI::App& root) {
     IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     // The delay shows in every parameter; a partial linear start is fine here.
     identify.allow_partial = true;
+    std::vector<Check> checks;
     const IdentificationResult linear =
-        Identify(LoadTrainingFlights(options->flights, SourceOptions(options->identify)), identify);
+        IdentifyWithChecks(LoadTrainingFlights(options->flights, SourceOptions(options->identify)), identify, &checks);
     const DelayEstimate estimate = EstimateDelay(linear, options->delay);
+    for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
     if (!options->flights.json_path.empty()) {
       nlohmann::json curve = nlohmann::json::array();
       for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
@@ -53,7 +57,8 @@ Command AddDelayCommand(CLI::App& root) {
                      {"criterion_curve", curve},
                      {"linear", LinearJson(linear)},
                      {"refined", RefinedJson(linear, estimate.refined)},
-                     {"warnings", estimate.warnings}});
+                     {"warnings", estimate.warnings},
+                     {"checks", ChecksJson(checks)}});
     }
     if (!options->flights.quiet) {
       std::cout << "rotorid delay: " << 1000 * estimate.delay_s << " ms +- " << 1000 * estimate.delay_std_s
@@ -65,7 +70,7 @@ Command AddDelayCommand(CLI::App& root) {
       std::cout << "\n";
       PrintWarnings(estimate.warnings);
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -1,9 +1,12 @@
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/diagnosis/diagnosis.h"
+#include "rotorid/diagnosis/diagnosis_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
@@ -49,15 +52,26 @@ Command AddDiagnoseCommand(CLI::App& root) {
     diagnosis.candidates = ParseEffectList(options->effects);
     if (const std::string problem = diagnosis.Validate(); !problem.empty()) throw Error(problem);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const std::vector<ProcessedFlight> flights =
-        ProcessFlights(LoadTrainingFlights(options->flights, source), diagnosis.identify.observation);
+    const std::vector<FlightData> raw = LoadTrainingFlights(options->flights, source);
+    const std::vector<ProcessedFlight> flights = ProcessFlights(raw, diagnosis.identify.observation);
+    std::vector<Check> checks = CheckFlights(raw, flights);
     std::vector<ProcessedFlight> held_out;
     if (!options->flights.validate_log_paths.empty())
       held_out = ProcessFlights(LoadValidationFlights(options->flights, source), diagnosis.identify.observation);
 
     Progress progress("diagnose", 0, options->flights.quiet);
-    const Diagnosis result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
+    Diagnosis result;
+    try {
+      result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
+    } catch (const Error& e) {
+      if (!AnyCheckFailed(checks)) throw;
+      throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(checks));
+    }
     progress.Finish();
+    std::vector<std::string> configs;
+    for (const ProcessedFlight& f : flights)
+      if (std::find(configs.begin(), configs.end(), f.vehicle.name) == configs.end()) configs.push_back(f.vehicle.name);
+    for (Check& c : CheckDiagnosis(result, configs)) checks.push_back(std::move(c));
 
     nlohmann::json report = DiagnosisJson(result);
     report["rotorid_version"] = kRotoridVersion;
@@ -65,6 +79,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
     report["settings"] = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
                           {"tls", TlsOptionsJson(diagnosis.identify.tls)},
                           {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
+    report["checks"] = ChecksJson(checks);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {
@@ -87,7 +102,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
       PrintWarnings(result.warnings);
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

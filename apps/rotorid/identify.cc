@@ -3,6 +3,7 @@
 
 #include "commands.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 
@@ -23,12 +24,14 @@ Command AddIdentifyCommand(CLI::App& root) {
   command.run = [options]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const std::vector<FlightData> flights = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
-    const IdentificationResult result = Identify(flights, identify);
+    std::vector<Check> checks;
+    const IdentificationResult result = IdentifyWithChecks(flights, identify, &checks);
     const nlohmann::json report = {{"rotorid_version", kRotoridVersion},
                                    {"command", "identify"},
                                    {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
                                                  {"tls", TlsOptionsJson(identify.tls)}}},
-                                   {"linear", LinearJson(result)}};
+                                   {"linear", LinearJson(result)},
+                                   {"checks", ChecksJson(checks)}};
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {
@@ -50,7 +53,7 @@ Command AddIdentifyCommand(CLI::App& root) {
       PrintWarnings(result.warnings);
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

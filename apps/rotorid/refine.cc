@@ -7,6 +7,8 @@
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/refine/refine_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
@@ -89,8 +91,11 @@ Command AddRefineCommand(CLI::App& root) {
     for (const std::string& assignment : options->initial) refine.initial.Assign(assignment);
     if (const std::string problem = refine.Validate(); !problem.empty()) throw Error(problem);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const IdentificationResult linear = Identify(LoadTrainingFlights(options->flights, source), identify);
+    std::vector<Check> checks;
+    const IdentificationResult linear =
+        IdentifyWithChecks(LoadTrainingFlights(options->flights, source), identify, &checks);
     const RefineResult refined = Refine(linear, refine);
+    for (Check& c : CheckRefinement(linear, refined, refine)) checks.push_back(std::move(c));
 
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},
@@ -107,9 +112,12 @@ Command AddRefineCommand(CLI::App& root) {
       held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
       held_out_refined = RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi),
                                                   refined.effects);
+      for (Check& c : CheckRelativeError(held_out_refined, "held-out refined", /*held_out=*/true))
+        checks.push_back(std::move(c));
       report["held_out"] = {{"linear", {{"relative_error_pct", ComponentsJson(held_out_linear)}}},
                             {"refined", {{"relative_error_pct", ComponentsJson(held_out_refined)}}}};
     }
+    report["checks"] = ChecksJson(checks);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     if (!options->flights.report_dir.empty()) {
       ReportInput input;
@@ -140,7 +148,7 @@ Command AddRefineCommand(CLI::App& root) {
       PrintWarnings(linear.warnings);
       PrintWarnings(refined.warnings);
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -4,6 +4,7 @@
 #include "commands.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 
@@ -41,8 +42,9 @@ Command AddValidateCommand(CLI::App& root) {
     FlightSourceOptions source;
     source.rotor_signal = options->rotor_signal;
     source.column_map_path = options->column_map;
-    const std::vector<ProcessedFlight> flights =
-        ProcessFlights(LoadTrainingFlights(options->flights, source), observation);
+    const std::vector<FlightData> raw = LoadTrainingFlights(options->flights, source);
+    const std::vector<ProcessedFlight> flights = ProcessFlights(raw, observation);
+    std::vector<Check> checks = CheckFlights(raw, flights);
     // Refined parameters are only valid together with their effects.
     const bool refined = options->block == "refined" ||
                          (options->block.empty() && params.contains("refined") && params["refined"].contains("parameters"));
@@ -62,6 +64,8 @@ Command AddValidateCommand(CLI::App& root) {
                              {"settings", {{"observation", ObservationOptionsJson(observation)}}},
                              {"relative_error_pct", ComponentsJson(combined)},
                              {"flights", per_flight}};
+    for (Check& c : CheckRelativeError(combined, "validation", /*held_out=*/true)) checks.push_back(std::move(c));
+    report["checks"] = ChecksJson(checks);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {
@@ -88,7 +92,7 @@ Command AddValidateCommand(CLI::App& root) {
       std::cout << "relative error (paper Table III): " << FormatComponents(combined) << "\n";
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }
