@@ -7,6 +7,9 @@
 
 #include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/refine/ablate.h"
+#include "rotorid/refine/refine_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/progress.h"
@@ -60,7 +63,8 @@ Command AddAblateCommand(CLI::App& root) {
     const FlightSourceOptions source = SourceOptions(options->identify);
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
-    const IdentificationResult linear = Identify(training.flights, identify);
+    std::vector<Check> checks;
+    const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
     std::vector<ProcessedFlight> held_out;
     if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, identify.observation);
     Progress progress("ablate", int64_t{1} << effects.size(), options->flights.quiet);
@@ -83,6 +87,9 @@ Command AddAblateCommand(CLI::App& root) {
                             {"effects_values", EffectsJson(e.result.effects, e.result.effects_std, e.effects)}};
       if (!held_out.empty()) row["held_out_relative_error_pct"] = ComponentsJson(e.held_out_relative_error_pct);
       rows.push_back(row);
+      // Each subset's failed checks (the passing ones would repeat for every subset).
+      for (Check& c : CheckRefinement(linear, e.result, options->refine, SubsetName(e.effects)))
+        if (c.status != CheckStatus::kOk) checks.push_back(std::move(c));
     }
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},
@@ -91,7 +98,8 @@ Command AddAblateCommand(CLI::App& root) {
          {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
         {"effective_samples", ablation.effective_samples},
         {"linear", LinearJson(linear)},
-        {"ablation", rows}};
+        {"ablation", rows},
+        {"checks", ChecksJson(checks)}};
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     const std::string report_path =
@@ -111,7 +119,7 @@ Command AddAblateCommand(CLI::App& root) {
       std::cout.unsetf(std::ios::floatfield);
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rotorid/ident/checks.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/io/flight_selection.h"
@@ -101,6 +102,9 @@ bool OptionsValidated();
 std::string FormatComponents(const std::vector<std::optional<double>>& values);
 void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution);
 void PrintWarnings(const std::vector<std::string>& warnings);
+// Prints the checks that did not pass (errors even under --quiet) and a summary line; returns the
+// exit code they call for: 3 when a check has status error, else 0.
+int PrintChecks(const std::vector<Check>& checks, bool quiet);
 
 Command AddSimulateCommand(CLI::App& root);
 Command AddIdentifyCommand(CLI::App& root);

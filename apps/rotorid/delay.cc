@@ -5,6 +5,9 @@
 
 #include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/refine/delay.h"
+#include "rotorid/refine/refine_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/progress.h"
 #include "rotorid/report/refine_json.h"
@@ -35,11 +38,13 @@ Command AddDelayCommand(CLI::App& root) {
     // The delay shows in every parameter; a partial linear start is fine here.
     identify.allow_partial = true;
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
-    const IdentificationResult linear = Identify(loaded.flights, identify);
+    std::vector<Check> checks;
+    const IdentificationResult linear = IdentifyWithChecks(loaded.flights, identify, &checks);
     Progress progress("delay: search and refinement", 0, options->flights.quiet);
     progress.StartTicking();
     const DelayEstimate estimate = EstimateDelay(linear, options->delay);
     progress.Finish();
+    for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
     nlohmann::json curve = nlohmann::json::array();
     for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
@@ -57,7 +62,8 @@ Command AddDelayCommand(CLI::App& root) {
                              {"criterion_curve", curve},
                              {"linear", LinearJson(linear)},
                              {"refined", RefinedJson(linear, estimate.refined)},
-                             {"warnings", estimate.warnings}};
+                             {"warnings", estimate.warnings},
+                             {"checks", ChecksJson(checks)}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     const std::string report_path = WriteCommandReport(
@@ -75,7 +81,7 @@ Command AddDelayCommand(CLI::App& root) {
       PrintWarnings(estimate.warnings);
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -1,9 +1,12 @@
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/diagnosis/diagnosis.h"
+#include "rotorid/diagnosis/diagnosis_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
@@ -52,12 +55,23 @@ Command AddDiagnoseCommand(CLI::App& root) {
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
     const std::vector<ProcessedFlight> flights = ProcessFlights(training.flights, diagnosis.identify.observation);
+    std::vector<Check> checks = CheckFlights(training.flights, flights);
     std::vector<ProcessedFlight> held_out;
     if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, diagnosis.identify.observation);
 
     Progress progress("diagnose", 0, options->flights.quiet);
-    const Diagnosis result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
+    Diagnosis result;
+    try {
+      result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
+    } catch (const Error& e) {
+      if (!AnyCheckFailed(checks)) throw;
+      throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(checks));
+    }
     progress.Finish();
+    std::vector<std::string> configs;
+    for (const ProcessedFlight& f : flights)
+      if (std::find(configs.begin(), configs.end(), f.vehicle.name) == configs.end()) configs.push_back(f.vehicle.name);
+    for (Check& c : CheckDiagnosis(result, configs)) checks.push_back(std::move(c));
 
     nlohmann::json report = DiagnosisJson(result);
     report["rotorid_version"] = kRotoridVersion;
@@ -65,6 +79,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
     report["settings"] = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
                           {"tls", TlsOptionsJson(diagnosis.identify.tls)},
                           {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
+    report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
@@ -88,7 +103,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
       PrintWarnings(result.warnings);
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -3,6 +3,7 @@
 
 #include "commands.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/progress.h"
@@ -29,14 +30,16 @@ Command AddIdentifyCommand(CLI::App& root) {
     // Long logs take seconds: an elapsed-time line on a terminal (nothing drawn for short work).
     Progress progress("identify", 0, options->flights.quiet);
     progress.StartTicking();
-    const IdentificationResult result = Identify(flights, identify);
+    std::vector<Check> checks;
+    const IdentificationResult result = IdentifyWithChecks(flights, identify, &checks);
     progress.Finish();
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},
         {"command", "identify"},
         {"settings",
          {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
-        {"linear", LinearJson(result)}};
+        {"linear", LinearJson(result)},
+        {"checks", ChecksJson(checks)}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     const std::string report_path =
@@ -51,7 +54,7 @@ Command AddIdentifyCommand(CLI::App& root) {
       PrintWarnings(result.warnings);
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -8,6 +8,9 @@
 
 #include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/refine/refine.h"
+#include "rotorid/refine/refine_checks.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/progress.h"
@@ -93,11 +96,13 @@ Command AddRefineCommand(CLI::App& root) {
     const FlightSourceOptions source = SourceOptions(options->identify);
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
-    const IdentificationResult linear = Identify(training.flights, identify);
+    std::vector<Check> checks;
+    const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
     Progress progress("refine: Ceres", 0, options->flights.quiet);
     progress.StartTicking();
     const RefineResult refined = Refine(linear, refine);
     progress.Finish();
+    for (Check& c : CheckRefinement(linear, refined, refine)) checks.push_back(std::move(c));
 
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},
@@ -114,9 +119,12 @@ Command AddRefineCommand(CLI::App& root) {
       held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
       held_out_refined = RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi),
                                                   refined.effects);
+      for (Check& c : CheckRelativeError(held_out_refined, "held-out refined", /*held_out=*/true))
+        checks.push_back(std::move(c));
       report["held_out"] = {{"linear", {{"relative_error_pct", ComponentsJson(held_out_linear)}}},
                             {"refined", {{"relative_error_pct", ComponentsJson(held_out_refined)}}}};
     }
+    report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     if (!options->flights.report_dir.empty()) {
@@ -148,7 +156,7 @@ Command AddRefineCommand(CLI::App& root) {
       PrintWarnings(linear.warnings);
       PrintWarnings(refined.warnings);
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

@@ -3,6 +3,7 @@
 
 #include "commands.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
@@ -44,6 +45,7 @@ Command AddValidateCommand(CLI::App& root) {
         params.contains("settings") && params["settings"].contains("observation") ? params["settings"]["observation"]
                                                                                   : nlohmann::json());
     const std::vector<ProcessedFlight> flights = ProcessFlights(loaded.flights, observation);
+    std::vector<Check> checks = CheckFlights(loaded.flights, flights);
     // Refined parameters are only valid together with their effects.
     const bool refined = options->block == "refined" || (options->block.empty() && params.contains("refined") &&
                                                          params["refined"].contains("parameters"));
@@ -64,6 +66,8 @@ Command AddValidateCommand(CLI::App& root) {
                              {"relative_error_pct", ComponentsJson(combined)},
                              {"flights", per_flight}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
+    for (Check& c : CheckRelativeError(combined, "validation", /*held_out=*/true)) checks.push_back(std::move(c));
+    report["checks"] = ChecksJson(checks);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     std::string report_path;
     if (!options->flights.report_dir.empty()) {
@@ -90,7 +94,7 @@ Command AddValidateCommand(CLI::App& root) {
       std::cout << "relative error (paper Table III): " << FormatComponents(combined) << "\n";
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
-    return 0;
+    return PrintChecks(checks, options->flights.quiet);
   };
   return command;
 }

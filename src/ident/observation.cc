@@ -47,6 +47,32 @@ Eigen::Vector3d ColumnNoise(const Eigen::MatrixXd& x) {
   return sigma;
 }
 
+// The samples [begin, end) free of gaps longer than kMaxGapIntervals sample intervals; a gap
+// further than `edge_s` from both ends of the log is an error naming it.
+std::pair<int, int> GapFreeRange(const FlightLog& log, double dt, double edge_s) {
+  const int n = log.num_samples();
+  int begin = 0, end = n;
+  for (int i = 1; i < n; ++i) {
+    const double gap = log.t_s[i] - log.t_s[i - 1];
+    if (gap <= kMaxGapIntervals * dt) continue;
+    if (log.t_s[i - 1] - log.t_s[0] < edge_s) {
+      begin = i;
+    } else if (log.t_s[n - 1] - log.t_s[i] < edge_s) {
+      end = i;
+      break;
+    } else {
+      throw Error(log.source + ": the time jumps by " + std::to_string(gap) + " s (" +
+                  std::to_string(static_cast<long long>(std::llround(std::min(gap / dt, 1e18)))) +
+                  " sample intervals) from t = " + std::to_string(log.t_s[i - 1]) + " s to t = " +
+                  std::to_string(log.t_s[i]) + " s (data row " + std::to_string(i + 1) +
+                  "); rotorid does not interpolate across gaps longer than " +
+                  std::to_string(static_cast<int>(kMaxGapIntervals)) +
+                  " samples: use the parts before and after it as separate flights (--window)");
+    }
+  }
+  return {begin, end};
+}
+
 }  // namespace
 
 Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared) {
@@ -64,6 +90,11 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   const double dt = log.MedianDt();
   if (!(dt > 0.0)) throw Error(log.source + ": cannot determine the sample interval");
   const double fs = 1.0 / dt;
+  // Interpolation across a gap invents data, and over a long one a grid that memory cannot hold.
+  // Interpolation across a gap invents data, and over a long one a grid that memory cannot hold. A
+  // gap within the edge that is trimmed anyway (logging start-up) cuts that edge off.
+  const auto [begin, end] = GapFreeRange(log, dt, options.edge_trim_s);
+  if (begin > 0 || end < log.num_samples()) return ProcessFlight(log.Slice(begin, end), vehicle, weight, options);
   if (const std::string problem = options.filter.Validate(fs); !problem.empty())
     throw Error(log.source + ": " + problem + " (log sampled at " + std::to_string(fs) + " Hz)");
 

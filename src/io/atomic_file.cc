@@ -1,5 +1,6 @@
 #include "rotorid/io/atomic_file.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -13,7 +14,25 @@
 
 namespace rotorid {
 
+namespace {
+
+// The folder holding `path`, for creating the temporary file beside it and syncing the rename.
+std::string ParentFolder(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+}  // namespace
+
 void WriteFileAtomically(const std::string& path, const std::string& content) {
+  if (path.empty()) throw Error("output path is empty");
+  // A rename would replace a device node, a FIFO or a socket by a regular file.
+  struct stat existing {};
+  if (::stat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode))
+    throw Error(path +
+                ": exists and is not a regular file (a folder, device, FIFO or socket); rotorid replaces only "
+                "regular files: give the path of a file");
   std::string tmp = path + ".tmp.XXXXXX";
   const int fd = mkstemp(tmp.data());
   if (fd < 0) throw Error(path + ": cannot create a temporary file beside it: " + std::strerror(errno));
@@ -31,10 +50,18 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
   }
   // mkstemp creates 0600; outputs are ordinary user files.
   fchmod(fd, 0644);
-  if (::close(fd) != 0 || std::rename(tmp.c_str(), path.c_str()) != 0) {
+  // The content reaches the disk before the rename makes it visible: after a crash, the old file or
+  // the whole new one, never an empty or partial one.
+  if (::fsync(fd) != 0 || ::close(fd) != 0 || std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     std::remove(tmp.c_str());
     throw Error(path + ": cannot write: " + reason);
+  }
+  // And the rename itself (best effort: some file systems refuse to sync a folder).
+  const int folder = ::open(ParentFolder(path).c_str(), O_RDONLY | O_DIRECTORY);
+  if (folder >= 0) {
+    ::fsync(folder);
+    ::close(folder);
   }
 }
 

@@ -41,6 +41,17 @@ int CellColumn(std::string_view line, size_t cell_index) {
   return static_cast<int>(pos) + 1;
 }
 
+// The columns INTERFACE.md section 2 defines; any other column is ignored, whatever it holds.
+bool IsKnownColumn(const std::string& name) {
+  static const char* const kNames[] = {"t",     "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y",  "acc_z",
+                                       "pos_x", "pos_y",  "pos_z",  "roll",   "pitch", "yaw",    "qw",
+                                       "qx",    "qy",     "qz",     "vel_x",  "vel_y", "vel_z",  "voltage"};
+  for (const char* known : kNames)
+    if (name == known) return true;
+  return name.size() > 6 && name.compare(0, 6, "rotor_") == 0 &&
+         name.find_first_not_of("0123456789", 6) == std::string::npos;
+}
+
 struct ColumnSet {
   std::map<std::string, int> index;  // name -> cell index
   std::optional<int> Find(const std::string& name) const {
@@ -59,9 +70,11 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
   int line_number = 0;
   std::optional<ColumnSet> columns;
   int header_line = 0;
+  std::string_view header_text;
   size_t num_cells = 0;
   std::vector<std::string> header_names;
   std::vector<std::vector<double>> data;  // per column index (cell index)
+  std::vector<bool> known;                 // per cell index: a column rotorid reads
 
   while (!rest.empty()) {
     const size_t newline = rest.find('\n');
@@ -80,11 +93,13 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
     if (!columns) {
       columns.emplace();
       header_line = line_number;
+      header_text = line;
       const auto names = SplitCells(line);
       num_cells = names.size();
       for (size_t k = 0; k < names.size(); ++k) {
         const std::string name(names[k]);
         header_names.push_back(name);
+        known.push_back(IsKnownColumn(name));
         if (name.empty()) throw Error(Located(source, line_number, CellColumn(line, k), "empty column name in header"));
         if (!columns->index.emplace(name, static_cast<int>(k)).second)
           throw Error(Located(source, line_number, CellColumn(line, k), "duplicate column '" + name + "'"));
@@ -99,6 +114,7 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
                               std::to_string(num_cells) + " (truncated or malformed row)"));
     }
     for (size_t k = 0; k < cells.size(); ++k) {
+      if (!known[k]) continue;
       double value = 0.0;
       const char* first = cells[k].data();
       const char* last = first + cells[k].size();
@@ -161,10 +177,17 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
     while (columns->Find("rotor_" + std::to_string(num_rotors + 1))) ++num_rotors;
     if (num_rotors == 0) throw Error(Located(source, header_line, 0, "missing required column 'rotor_1'"));
   }
+  // A rotor the vehicle file leaves out would be dropped silently.
+  if (const auto extra = columns->Find("rotor_" + std::to_string(num_rotors + 1)))
+    throw Error(Located(source, header_line, CellColumn(header_text, *extra),
+                        "the log has column 'rotor_" + std::to_string(num_rotors + 1) + "' but the vehicle file has " +
+                            std::to_string(num_rotors) + " rotors: give every rotor in the vehicle file"));
+  std::vector<int> rotor_columns;  // all located before any allocation that scales with the count
+  for (int r = 0; r < num_rotors; ++r) rotor_columns.push_back(require("rotor_" + std::to_string(r + 1)));
   log.rotor_radps.resize(n, num_rotors);
   for (int r = 0; r < num_rotors; ++r) {
     const std::string name = "rotor_" + std::to_string(r + 1);
-    log.rotor_radps.col(r) = column(require(name));
+    log.rotor_radps.col(r) = column(rotor_columns[r]);
     if ((log.rotor_radps.col(r).array() < 0.0).any())
       throw Error(Located(source, header_line, 0, "column '" + name + "' has negative rotor speeds; it must hold |Omega| in rad/s"));
   }

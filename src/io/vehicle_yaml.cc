@@ -26,6 +26,10 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
   const YAML::Node rotors = root["rotors"];
   if (!rotors) throw Error(source + ": missing 'rotors'");
   if (!rotors.IsSequence() || rotors.size() == 0) internal::FailAt(source, rotors, "rotors must be a non-empty list");
+  if (rotors.size() > static_cast<size_t>(kMaxVehicleRotors))
+    internal::FailAt(source, rotors,
+                     "rotors lists " + std::to_string(rotors.size()) + " rotors; rotorid handles at most " +
+                         std::to_string(kMaxVehicleRotors));
   for (size_t i = 0; i < rotors.size(); ++i) {
     const YAML::Node rotor = rotors[i];
     const std::string label = "rotor " + std::to_string(i + 1);
@@ -57,7 +61,11 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
   return vehicle;
 }
 
-Vehicle ReadVehicleYaml(const std::string& path) { return ParseVehicleYaml(ReadFile(path), path); }
+Vehicle ReadVehicleYaml(const std::string& path) {
+  Vehicle vehicle = ParseVehicleYaml(ReadFile(path), path);
+  vehicle.source = path;
+  return vehicle;
+}
 
 std::string VehicleToYaml(const Vehicle& vehicle) {
   std::ostringstream out;

@@ -65,6 +65,11 @@ struct ProcessedFlight {
 // sqrt(filtfilt(Omega^2)) per column: the rotor signal that enters the rows.
 Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared);
 
+// Longest time step (in median sample intervals) that ProcessFlight interpolates across; a longer
+// gap is an error naming its place, unless it lies within the edge trim of either end, which is then
+// cut off (docs/input_formats.md).
+inline constexpr double kMaxGapIntervals = 10.0;
+
 ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,
                               const ObservationOptions& options);
 

@@ -1,0 +1,81 @@
+#pragma once
+
+// Plausibility checks of inputs and results (INTERFACE.md section 5, `checks[]`): the input
+// mistakes a user makes (units, rotor order and spins, a log on the ground) and results that
+// cannot be physical (an inertia that is not positive definite, kd < 0, NaN). Each check names
+// the likely cause and the fix; thresholds and the data they were tuned on: docs/report_format.md.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rotorid/ident/identify.h"
+
+namespace rotorid {
+
+enum class CheckStatus { kOk, kWarning, kError };
+const char* CheckStatusName(CheckStatus status);
+
+struct Check {
+  std::string name;  // accelerometer_units, rotor_order, inertia, ...
+  CheckStatus status = CheckStatus::kOk;
+  std::string message;
+};
+
+bool AnyCheckFailed(const std::vector<Check>& checks);
+// The messages of the failed checks, joined by "; ".
+std::string FailedCheckMessages(const std::vector<Check>& checks);
+
+// Thresholds of the input checks (docs/report_format.md gives the values measured on the bundled
+// simulated flights and the real Crazyflie flights).
+struct InputCheckThresholds {
+  // Median |specific force| / g outside [low, high] is an error (accelerometer units).
+  double gravity_ratio_low = 0.7;
+  double gravity_ratio_high = 1.4;
+  // mass / r^3 (kg/m^3, r the mean rotor distance from the z axis) of real multirotors.
+  double density_low_kgpm3 = 5.0;
+  double density_high_kgpm3 = 5000.0;
+  // kt from hover (m g / mean sum Omega^2) over rho r^4 / (4 pi^2): a thrust coefficient C_T (D/r)^4.
+  double thrust_coefficient_low = 2e-3;
+  double thrust_coefficient_high = 3.0;
+  // Apparent roll/pitch inertia (from the rotor moments and the gyro) over m r^2.
+  double inertia_ratio_low = 0.01;
+  double inertia_ratio_high = 5.0;
+  // The rotor-moment pattern fits the vehicle file when its correlation exceeds this per axis.
+  double pattern_correlation_ok = 0.4;
+  // A transposition of two rotors is named when it fits with at least this correlation (and by 0.5
+  // better than the file's order).
+  double swap_correlation = 0.8;
+  // Below these the log is motionless: RMS angular velocity (rad/s) and thrust variation (%).
+  double motionless_angular_velocity_radps = 0.02;
+  double motionless_thrust_variation_pct = 1.0;
+};
+
+// The input checks of each flight (`raw[k]` is the flight `processed[k]` came from).
+std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
+                                const InputCheckThresholds& thresholds = {});
+
+// Named parameter values with their std (std absent: not known) of one model.
+struct CheckedParameters {
+  std::map<std::string, double> value;
+  std::map<std::string, double> std;
+  std::map<std::string, bool> essential;
+};
+CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolution& solution);
+
+// kt > 0, kd > 0, inertia of each configuration positive definite and the triangle inequalities
+// (violations beyond 3 std), finite values and std, an essential parameter with std 0.
+// `label` says which model ("linear", "refined").
+std::vector<Check> CheckParameters(const CheckedParameters& parameters, const std::vector<std::string>& configs,
+                                   const std::string& label);
+// Table III above 100 % (error on the identification flights, warning on held-out ones) or not finite.
+std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& relative_error_pct,
+                                      const std::string& label, bool held_out);
+
+// Input checks, the identification, and the checks of its result. When the identification fails
+// while an input check has failed, the error names that likely cause.
+IdentificationResult IdentifyWithChecks(const std::vector<FlightData>& flights, const IdentifyOptions& options,
+                                        std::vector<Check>* checks);
+
+}  // namespace rotorid

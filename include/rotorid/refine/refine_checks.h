@@ -1,0 +1,21 @@
+#pragma once
+
+// The plausibility checks (rotorid/ident/checks.h) of refinement and delay results: the refined
+// parameters, effects that are not finite or end on the bound of their range, Table III.
+
+#include <string>
+#include <vector>
+
+#include "rotorid/ident/checks.h"
+#include "rotorid/refine/delay.h"
+#include "rotorid/refine/refine.h"
+
+namespace rotorid {
+
+// `label` names the model in the messages ("refined", "delay,motor_lag", ...).
+std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
+                                   const RefineOptions& options, const std::string& label = "refined");
+std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
+                              const DelayOptions& options);
+
+}  // namespace rotorid

@@ -1,0 +1,479 @@
+#include "rotorid/ident/checks.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
+#include "rotorid/core/error.h"
+#include "rotorid/io/flight_source.h"
+#include "rotorid/model/parameters.h"
+
+namespace rotorid {
+
+const char* CheckStatusName(CheckStatus status) {
+  switch (status) {
+    case CheckStatus::kOk:
+      return "ok";
+    case CheckStatus::kWarning:
+      return "warning";
+    case CheckStatus::kError:
+      return "error";
+  }
+  return "error";
+}
+
+bool AnyCheckFailed(const std::vector<Check>& checks) {
+  return std::any_of(checks.begin(), checks.end(), [](const Check& c) { return c.status == CheckStatus::kError; });
+}
+
+std::string FailedCheckMessages(const std::vector<Check>& checks) {
+  std::string out;
+  for (const Check& c : checks)
+    if (c.status == CheckStatus::kError) out += (out.empty() ? "" : "; ") + c.message;
+  return out;
+}
+
+namespace {
+
+constexpr double kAirDensityKgpm3 = 1.225;
+constexpr double kRpmPerRadps = 60.0 / (2.0 * M_PI);
+constexpr double kDegPerRad = 180.0 / M_PI;
+
+std::string Number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.3g", value);
+  return buffer;
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd ac = a.array() - a.mean(), bc = b.array() - b.mean();
+  const double denominator = ac.norm() * bc.norm();
+  return denominator > 0.0 ? ac.dot(bc) / denominator : 0.0;
+}
+
+std::string VehicleFile(const Vehicle& vehicle) {
+  return vehicle.source.empty() ? "the vehicle file of '" + vehicle.name + "'" : vehicle.source;
+}
+
+// What one flight shows, at its IDIM row samples.
+struct FlightMetrics {
+  double gravity = kStandardGravity;
+  double acc_median = 0.0;            // median |specific force|
+  double gyro_median = 0.0;           // median |angular velocity|
+  double angular_velocity_rms = 0.0;  // of |w|
+  double thrust_mean = 0.0;           // of sum Omega_i^2
+  double thrust_variation_pct = 0.0;
+  double thrust_force_correlation = 0.0;  // of sum Omega_i^2 with s_z
+  double arm_m = 0.0;                     // mean rotor distance from the z axis
+  bool rotor_is_speed = true;             // a speed (measured, or a command through the vehicle's map)
+  bool rotor_is_measured_speed = true;
+  // Least-squares angular acceleration per unit Omega_i^2 variation (3 x rotors).
+  Eigen::MatrixXd moment_pattern;
+};
+
+FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
+  FlightMetrics m;
+  m.gravity = f.gravity_mps2;
+  m.rotor_is_speed = !RotorSignalIsCommand(raw.log);
+  m.rotor_is_measured_speed = m.rotor_is_speed && !raw.log.metadata.count("command_to_speed");
+  const int rows = f.num_rows_samples(), rotors = f.vehicle.num_rotors();
+  std::vector<double> acc(rows), gyro(rows);
+  Eigen::VectorXd thrust(rows), force_z(rows);
+  Eigen::MatrixXd x(rows, rotors), y(rows, 3);
+  for (int r = 0; r < rows; ++r) {
+    const int i = f.row_samples[r];
+    acc[r] = f.specific_force.row(i).norm();
+    gyro[r] = f.angular_velocity.row(i).norm();
+    m.angular_velocity_rms += gyro[r] * gyro[r];
+    x.row(r) = f.rotor.row(i).array().square().matrix();
+    thrust[r] = x.row(r).sum();
+    force_z[r] = f.specific_force(i, 2);
+    y.row(r) = f.angular_acceleration.row(i);
+  }
+  m.acc_median = Median(acc);
+  m.gyro_median = Median(gyro);
+  m.angular_velocity_rms = std::sqrt(m.angular_velocity_rms / std::max(rows, 1));
+  m.thrust_mean = thrust.mean();
+  if (m.thrust_mean > 0.0)
+    m.thrust_variation_pct = 100.0 * std::sqrt((thrust.array() - m.thrust_mean).square().mean()) / m.thrust_mean;
+  m.thrust_force_correlation = Correlation(thrust, force_z);
+  for (const Rotor& rotor : f.vehicle.rotors) m.arm_m += rotor.position_m.head<2>().norm() / rotors;
+  // Centred regression (the intercept takes gyroscopic and first-moment terms that do not vary
+  // with a single rotor); a tiny ridge keeps it defined when a rotor never varies.
+  x.rowwise() -= x.colwise().mean();
+  y.rowwise() -= y.colwise().mean();
+  Eigen::MatrixXd normal = x.transpose() * x;
+  normal.diagonal().array() += 1e-12 * std::max(normal.diagonal().maxCoeff(), 1e-300);
+  m.moment_pattern = normal.ldlt().solve(x.transpose() * y).transpose();
+  return m;
+}
+
+// Per axis, the angular acceleration pattern the vehicle file predicts for each rotor (up to a
+// positive factor): roll y_i, pitch -x_i, yaw -spin_i.
+Eigen::MatrixXd PredictedPattern(const Vehicle& vehicle, const std::vector<int>& order) {
+  Eigen::MatrixXd p(3, vehicle.num_rotors());
+  for (int i = 0; i < vehicle.num_rotors(); ++i) {
+    const Rotor& rotor = vehicle.rotors[order[i]];
+    p.col(i) << rotor.position_m.y(), -rotor.position_m.x(), -rotor.spin;
+  }
+  return p;
+}
+
+// Correlation per axis of the measured and the predicted pattern.
+Eigen::Vector3d PatternCorrelation(const Eigen::MatrixXd& measured, const Eigen::MatrixXd& predicted) {
+  Eigen::Vector3d c;
+  for (int a = 0; a < 3; ++a) c[a] = Correlation(measured.row(a).transpose(), predicted.row(a).transpose());
+  return c;
+}
+
+Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
+  const double ratio = m.acc_median / m.gravity;
+  const std::string measured = "median |acc| " + Number(m.acc_median) + " m/s^2, median |gyro| " +
+                               Number(m.gyro_median) + " rad/s, g = " + Number(m.gravity) + " m/s^2";
+  if (ratio >= t.gravity_ratio_low && ratio <= t.gravity_ratio_high)
+    return {"accelerometer_units", CheckStatus::kOk, source + ": " + measured};
+  std::string cause;
+  const double gyro_ratio = m.gyro_median / m.gravity;
+  if (gyro_ratio >= t.gravity_ratio_low && gyro_ratio <= t.gravity_ratio_high)
+    cause = "the gyro and accelerometer columns appear swapped: exchange gyro_x..z and acc_x..z";
+  else if (std::abs(m.acc_median - 1.0) < 0.3)
+    cause =
+        "the accelerometer appears to be in g: multiply acc_x..z by " + Number(m.gravity) + " (a column map: unit g)";
+  else if (std::abs(m.acc_median / 1000.0 - 1.0) < 0.3)
+    cause = "the accelerometer appears to be in mg: multiply acc_x..z by " + Number(m.gravity / 1000.0);
+  else
+    cause = "the accelerometer columns are not the specific force in m/s^2 (about g in hover)";
+  return {"accelerometer_units", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
+}
+
+Check MotionCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
+  const std::string measured = "RMS angular velocity " + Number(m.angular_velocity_rms) + " rad/s, thrust variation " +
+                               Number(m.thrust_variation_pct) + " %";
+  if (m.thrust_mean <= 0.0)
+    return {"motion", CheckStatus::kError, source + ": the rotors never turn (all rotor columns 0): " + measured};
+  if (m.angular_velocity_rms < t.motionless_angular_velocity_radps &&
+      m.thrust_variation_pct < t.motionless_thrust_variation_pct)
+    return {"motion", CheckStatus::kError,
+            source + ": the log is motionless (" + measured +
+                "): it cannot determine inertia or kt; identify on a flight with roll, pitch, yaw and thrust changes "
+                "(docs/tutorial.md)"};
+  return {"motion", CheckStatus::kOk, source + ": " + measured};
+}
+
+// Airborne, the vertical specific force follows the thrust; on the ground it stays at g.
+Check AirborneCheck(const FlightMetrics& m, const std::string& source) {
+  const std::string measured = "correlation of sum Omega^2 with acc_z " + Number(m.thrust_force_correlation) +
+                               ", thrust variation " + Number(m.thrust_variation_pct) + " %";
+  if (m.thrust_variation_pct > 3.0 && m.thrust_force_correlation < 0.2)
+    return {"airborne", CheckStatus::kError,
+            source + ": the vertical acceleration does not follow the thrust (" + measured +
+                "): the log appears to be recorded on the ground (idle motors) or the rotor columns are not the "
+                "rotor speeds; use the airborne part (--window) of the log"};
+  return {"airborne", CheckStatus::kOk, source + ": " + measured};
+}
+
+// Mass, rotor positions and rotor speed units against each other: a real multirotor has a density
+// m / r^3 and a thrust coefficient (kt over rho r^4 / (4 pi^2)) in known ranges.
+Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheckThresholds& t, bool* plausible_kt) {
+  const Vehicle& v = raw.vehicle;
+  const std::string source = raw.log.source;
+  const double r = m.arm_m;
+  *plausible_kt = false;
+  if (!(r > 0.0)) return {"vehicle_scale", CheckStatus::kWarning, VehicleFile(v) + ": every rotor sits on the z axis"};
+  auto density = [&](double mass, double arm) { return mass / (arm * arm * arm); };
+  auto coefficient = [&](double mass, double arm, double thrust_mean) {
+    return mass * m.gravity / thrust_mean * 4.0 * M_PI * M_PI / (kAirDensityKgpm3 * std::pow(arm, 4));
+  };
+  auto fits = [&](double mass, double arm, double thrust_mean) {
+    const double d = density(mass, arm), c = coefficient(mass, arm, thrust_mean);
+    return d >= t.density_low_kgpm3 && d <= t.density_high_kgpm3 &&
+           (!m.rotor_is_speed || (c >= t.thrust_coefficient_low && c <= t.thrust_coefficient_high));
+  };
+  const double mass = v.mass_kg, thrust = m.thrust_mean;
+  const std::string measured =
+      "mass " + Number(mass) + " kg, arm " + Number(r) + " m: m/r^3 " + Number(density(mass, r)) + " kg/m^3" +
+      (m.rotor_is_speed ? ", kt from hover " + Number(mass * m.gravity / thrust) +
+                              " N s^2 = " + Number(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)"
+                        : "");
+  if (fits(mass, r, thrust)) {
+    *plausible_kt = m.rotor_is_speed;
+    return {"vehicle_scale", CheckStatus::kOk, source + ": " + measured};
+  }
+  const double rpm_thrust = thrust / (kRpmPerRadps * kRpmPerRadps);
+  std::string cause;
+  if (fits(mass / 1000.0, r, thrust))
+    cause = "the mass in " + VehicleFile(v) + " appears to be in grams: give it in kg";
+  else if (fits(mass, r / 1000.0, thrust))
+    cause = "the rotor positions in " + VehicleFile(v) + " appear to be in mm: give them in m";
+  else if (m.rotor_is_speed && fits(mass, r, rpm_thrust))
+    cause = "the rotor speeds of " + source + " appear to be in rpm: give |Omega| in rad/s (multiply by " +
+            Number(1.0 / kRpmPerRadps) + ")";
+  else
+    cause = "mass, rotor positions and rotor speeds do not fit a multirotor: check their units (kg, m, rad/s) in " +
+            VehicleFile(v) + " and " + source;
+  return {"vehicle_scale", CheckStatus::kError, cause + " (" + measured + ")"};
+}
+
+// Which rotor makes which moment: the measured pattern against the vehicle file's positions and
+// spins; a transposition that fits is named. With a plausible kt the pattern's size gives an
+// apparent roll/pitch inertia, whose ratio to m r^2 tells gyro units.
+std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bool plausible_kt,
+                               const InputCheckThresholds& t) {
+  const Vehicle& v = raw.vehicle;
+  const std::string& source = raw.log.source;
+  const int n = v.num_rotors();
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  const Eigen::MatrixXd predicted = PredictedPattern(v, order);
+  const Eigen::Vector3d c = PatternCorrelation(m.moment_pattern, predicted);
+  const std::string measured = "correlation of the rotor moments with " + VehicleFile(v) + ": roll " + Number(c[0]) +
+                               ", pitch " + Number(c[1]) + ", yaw " + Number(c[2]);
+  std::vector<Check> checks;
+  const double ok = t.pattern_correlation_ok;
+  if (std::min(c[0], c[1]) >= ok) {
+    if (c[2] < -ok)
+      checks.push_back({"rotor_spins", CheckStatus::kError,
+                        source + ": the yaw moments have the opposite sign of the spins in " + VehicleFile(v) +
+                            ": the spin directions appear reversed (+1 = counter-clockwise seen from above) (" +
+                            measured + ")"});
+    else
+      checks.push_back({"rotor_spins", CheckStatus::kOk, source + ": " + measured});
+    checks.push_back({"rotor_order", CheckStatus::kOk, source + ": " + measured});
+  } else {
+    int best_i = -1, best_j = -1;
+    double best = -1.0;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) {
+        std::swap(order[i], order[j]);
+        const Eigen::Vector3d s = PatternCorrelation(m.moment_pattern, PredictedPattern(v, order));
+        std::swap(order[i], order[j]);
+        if (std::min(s[0], s[1]) > best) best = std::min(s[0], s[1]), best_i = i, best_j = j;
+      }
+    // A swap is named only when it fits clearly better; a lagged command signal (no measured speed)
+    // blurs the pattern, so there it is a warning.
+    const bool clear = best >= t.swap_correlation && best - std::min(c[0], c[1]) >= 0.5;
+    if (clear)
+      checks.push_back({"rotor_order", m.rotor_is_measured_speed ? CheckStatus::kError : CheckStatus::kWarning,
+                        "rotors " + std::to_string(best_i + 1) + " and " + std::to_string(best_j + 1) +
+                            " appear swapped in " + VehicleFile(v) + " (the data of " + source +
+                            " fit the swapped order with correlation " + Number(best) + "; " + measured + ")"});
+    else
+      checks.push_back({"rotor_order", CheckStatus::kWarning,
+                        source + ": the rotor moments do not match the rotor positions of " + VehicleFile(v) +
+                            ": check the rotor order and positions (" + measured + ")"});
+    return checks;
+  }
+  if (!plausible_kt) return checks;
+  // Angular acceleration per unit Omega_i^2 is kt y_i / I_xx (roll) and -kt x_i / I_yy (pitch).
+  const double kt = v.mass_kg * m.gravity / m.thrust_mean, reference = v.mass_kg * m.arm_m * m.arm_m;
+  double log_ratio = 0.0;
+  for (int a = 0; a < 2; ++a) {
+    const Eigen::VectorXd p = predicted.row(a).transpose().array() - predicted.row(a).mean();
+    const Eigen::VectorXd b = m.moment_pattern.row(a).transpose().array() - m.moment_pattern.row(a).mean();
+    log_ratio += 0.5 * std::log(kt * p.squaredNorm() / b.dot(p) / reference);
+  }
+  const double ratio = std::exp(log_ratio);
+  const std::string inertia = "apparent roll/pitch inertia from the rotor moments " + Number(ratio) + " m r^2";
+  if (ratio >= t.inertia_ratio_low && ratio <= t.inertia_ratio_high) {
+    checks.push_back({"gyro_units", CheckStatus::kOk, source + ": " + inertia});
+  } else {
+    const bool degrees = ratio * kDegPerRad >= t.inertia_ratio_low && ratio * kDegPerRad <= t.inertia_ratio_high;
+    checks.push_back({"gyro_units", CheckStatus::kError,
+                      source + ": " +
+                          (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
+                                         Number(1.0 / kDegPerRad) + ")"
+                                   : "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)") +
+                          " (" + inertia + ")"});
+  }
+  return checks;
+}
+
+}  // namespace
+
+std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
+                                const InputCheckThresholds& thresholds) {
+  if (raw.size() != processed.size()) throw Error("CheckFlights: raw and processed flights differ in number");
+  std::vector<Check> checks;
+  for (size_t k = 0; k < raw.size(); ++k) {
+    const FlightMetrics m = Measure(raw[k], processed[k]);
+    const std::string& source = raw[k].log.source;
+    const Check acc = AccelerometerCheck(m, source, thresholds), motion = MotionCheck(m, source, thresholds);
+    checks.push_back(acc);
+    checks.push_back(motion);
+    // The checks below read the rotor data against the IMU: only once the IMU and motion are sane.
+    if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError) continue;
+    const Check airborne = AirborneCheck(m, source);
+    checks.push_back(airborne);
+    bool plausible_kt = false;
+    checks.push_back(ScaleCheck(m, raw[k], thresholds, &plausible_kt));
+    if (airborne.status == CheckStatus::kError) continue;
+    for (Check& c : RotorChecks(m, raw[k], plausible_kt, thresholds)) checks.push_back(std::move(c));
+  }
+  return checks;
+}
+
+CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolution& solution) {
+  CheckedParameters p;
+  for (int k = 0; k < system.num_parameters(); ++k) {
+    const std::string& name = system.parameter_names[k];
+    p.value[name] = solution.chi[k];
+    p.std[name] = solution.std[k];
+    p.essential[name] = solution.essential[k];
+  }
+  return p;
+}
+
+namespace {
+
+// Value, std (0 when unknown) and whether it was estimated.
+struct Estimate {
+  double value = 0.0;
+  double std = 0.0;
+  bool estimated = false;
+};
+
+Estimate Find(const CheckedParameters& p, const std::string& name) {
+  Estimate e;
+  if (const auto it = p.value.find(name); it != p.value.end()) e.value = it->second;
+  if (const auto it = p.std.find(name); it != p.std.end()) e.std = it->second;
+  const auto it = p.essential.find(name);
+  e.estimated = p.value.count(name) && (it == p.essential.end() || it->second);
+  return e;
+}
+
+// `yaw_anchored`: kd is estimated. Without it the yaw equation has no known scale and I_zz comes
+// from the gyroscopic terms alone, so it is left out of the tests.
+Check InertiaCheck(const CheckedParameters& p, const std::string& config, const std::string& label, bool yaw_anchored) {
+  const std::string name = label + " " + config;
+  auto get = [&](const char* n) { return Find(p, config + "." + n); };
+  const Estimate xx = get("I_xx"), yy = get("I_yy");
+  Estimate zz = get("I_zz");
+  zz.estimated = zz.estimated && yaw_anchored;
+  const Estimate* diagonal[3] = {&xx, &yy, &zz};
+  const char* axis[3] = {"I_xx", "I_yy", "I_zz"};
+  std::string problems;
+  for (int a = 0; a < 3; ++a) {
+    const Estimate& e = *diagonal[a];
+    if (e.estimated && e.value < -3.0 * e.std)
+      problems += std::string(problems.empty() ? "" : "; ") + axis[a] + " = " + Number(e.value) + " < 0";
+  }
+  // Triangle inequalities I_a + I_b >= I_c between the estimated diagonal entries, beyond 3 std.
+  for (int c = 0; c < 3; ++c) {
+    const Estimate &a = *diagonal[(c + 1) % 3], &b = *diagonal[(c + 2) % 3], &z = *diagonal[c];
+    if (!a.estimated || !b.estimated || !z.estimated) continue;
+    const double margin = a.value + b.value - z.value;
+    const double std = std::sqrt(a.std * a.std + b.std * b.std + z.std * z.std);
+    if (margin < -3.0 * std)
+      problems += std::string(problems.empty() ? "" : "; ") + axis[(c + 1) % 3] + " + " + axis[(c + 2) % 3] + " < " +
+                  axis[c] + " by " + Number(-margin);
+  }
+  if (problems.empty() && xx.estimated && yy.estimated && zz.estimated) {
+    Eigen::Matrix3d inertia;
+    inertia << xx.value, get("I_xy").value, get("I_xz").value, get("I_xy").value, yy.value, get("I_yz").value,
+        get("I_xz").value, get("I_yz").value, zz.value;
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia).eigenvalues()[0];
+    if (!(smallest > 0.0)) problems = "smallest eigenvalue " + Number(smallest) + " <= 0";
+  }
+  if (problems.empty())
+    return {"inertia", CheckStatus::kOk,
+            name + ": positive definite, triangle inequalities hold" +
+                (yaw_anchored ? "" : " (I_zz not tested: kd not estimated, so the yaw equation has no scale)")};
+  return {"inertia", CheckStatus::kError,
+          name + " inertia is not physical (" + problems +
+              "): a wrong rotor order, spin or unit in the inputs (see the input checks), or a log that does not "
+              "excite these axes"};
+}
+
+}  // namespace
+
+std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector<std::string>& configs,
+                                   const std::string& label) {
+  std::vector<Check> checks;
+  std::string not_finite, zero_std;
+  for (const auto& [name, value] : p.value) {
+    const Estimate e = Find(p, name);
+    if (!std::isfinite(value) || !std::isfinite(e.std))
+      not_finite += (not_finite.empty() ? "" : ", ") + name;
+    else if (e.estimated && p.std.count(name) && e.std == 0.0)
+      zero_std += (zero_std.empty() ? "" : ", ") + name;
+  }
+  if (!not_finite.empty())
+    checks.push_back(
+        {"finite", CheckStatus::kError, label + ": NaN or inf in " + not_finite + ": the data cannot determine them"});
+  else
+    checks.push_back({"finite", CheckStatus::kOk, label + ": every value and std is finite"});
+  if (!zero_std.empty())
+    checks.push_back({"parameter_std", CheckStatus::kError,
+                      label + ": std exactly 0 for " + zero_std +
+                          ": the data do not determine them (a motionless or unexcited log?)"});
+  const Estimate kt = Find(p, "kt"), kd = Find(p, "kd");
+  if (kt.estimated && !(kt.value > 0.0))
+    checks.push_back({"kt_positive", CheckStatus::kError,
+                      label + ": kt = " + Number(kt.value) +
+                          " <= 0: the rotor signal does not push the vehicle up; check the rotor columns and the "
+                          "accelerometer's sign (z up, about +g in hover)"});
+  else
+    checks.push_back({"kt_positive", CheckStatus::kOk, label + ": kt = " + Number(kt.value)});
+  if (kd.estimated && kd.value < -3.0 * kd.std)
+    checks.push_back({"kd_positive", CheckStatus::kError,
+                      label + ": kd = " + Number(kd.value) + " < 0 (std " + Number(kd.std) +
+                          "): the spin directions in the vehicle file appear reversed (+1 = counter-clockwise seen "
+                          "from above)"});
+  else
+    checks.push_back({"kd_positive", CheckStatus::kOk,
+                      label + ": kd = " + Number(kd.value) + (kd.estimated ? "" : " (not estimated)")});
+  for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd.estimated));
+  return checks;
+}
+
+std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& relative_error_pct,
+                                      const std::string& label, bool held_out) {
+  std::string above, not_finite;
+  for (size_t j = 0; j < relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j) {
+    if (!relative_error_pct[j]) continue;
+    const double e = *relative_error_pct[j];
+    if (!std::isfinite(e))
+      not_finite += std::string(not_finite.empty() ? "" : ", ") + kWrenchComponentNames[j];
+    else if (e > 100.0)
+      above += std::string(above.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " + Number(e) + " %";
+  }
+  if (!not_finite.empty())
+    return {{"relative_error", CheckStatus::kError, label + ": relative error not finite in " + not_finite}};
+  if (!above.empty())
+    return {{"relative_error", held_out ? CheckStatus::kWarning : CheckStatus::kError,
+             label + ": relative error above 100 % (" + above +
+                 "): the model explains less of the wrench than it gets wrong; check the input checks (units, rotor "
+                 "order, rotor signal)"}};
+  return {{"relative_error", CheckStatus::kOk, label + ": every relative error at most 100 %"}};
+}
+
+IdentificationResult IdentifyWithChecks(const std::vector<FlightData>& flights, const IdentifyOptions& options,
+                                        std::vector<Check>* checks) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  std::vector<ProcessedFlight> processed = ProcessFlights(flights, options.observation);
+  *checks = CheckFlights(flights, processed);
+  IdentificationResult result;
+  try {
+    result = IdentifyProcessed(std::move(processed), options);
+  } catch (const Error& e) {
+    if (!AnyCheckFailed(*checks)) throw;
+    throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(*checks));
+  }
+  for (Check& c :
+       CheckParameters(CheckedFromSolution(result.system, result.solution), result.system.config_names, "linear"))
+    checks->push_back(std::move(c));
+  for (Check& c : CheckRelativeError(result.relative_error_pct, "linear", /*held_out=*/false))
+    checks->push_back(std::move(c));
+  return result;
+}
+
+}  // namespace rotorid
