@@ -29,11 +29,13 @@ struct CommandToSpeed {
 // A vehicle configuration (INTERFACE.md section 3). The mass is the one known parameter.
 struct Vehicle {
   std::string name = "A";
-  std::string source;  // the file it was read from (empty when built in code), for messages
   double mass_kg = 0.0;
   std::vector<Rotor> rotors;
   // Applied to command logs only (a measured rotor speed is used as it is).
   std::optional<CommandToSpeed> command_to_speed;
+  // The file it was read from (empty when built in code), for messages. Last, so that aggregate
+  // initialisations {name, mass, rotors, map} stay valid.
+  std::string source = "";
 
   int num_rotors() const { return static_cast<int>(rotors.size()); }
   // Empty when valid, else what is wrong.
