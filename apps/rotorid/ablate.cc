@@ -88,7 +88,7 @@ Command AddAblateCommand(CLI::App& root) {
       if (!held_out.empty()) row["held_out_relative_error_pct"] = ComponentsJson(e.held_out_relative_error_pct);
       rows.push_back(row);
       // Each subset's failed checks (the passing ones would repeat for every subset).
-      for (Check& c : CheckRefinement(linear, e.result, options->refine, SubsetName(e.effects)))
+      for (Check& c : CheckRefinement(linear, e.result, SubsetName(e.effects)))
         if (c.status != CheckStatus::kOk) checks.push_back(std::move(c));
     }
     nlohmann::json report = {

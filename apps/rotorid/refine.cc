@@ -102,7 +102,7 @@ Command AddRefineCommand(CLI::App& root) {
     progress.StartTicking();
     const RefineResult refined = Refine(linear, refine);
     progress.Finish();
-    for (Check& c : CheckRefinement(linear, refined, refine)) checks.push_back(std::move(c));
+    for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
 
     nlohmann::json report = {
         {"rotorid_version", kRotoridVersion},

@@ -349,6 +349,7 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
       Eigen::MatrixXd full(dim, dim);
       covariance.GetCovarianceMatrixInTangentSpace(blocks, full.data());
       full *= scale;
+      result.has_covariance = true;
       const int offset = static_cast<int>(free.size());
       for (int a = 0; a < offset; ++a)
         for (int b = 0; b < offset; ++b)
@@ -461,22 +462,21 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   auto at_bound = [](double v, double lo, double hi) {
     return v <= lo + 1e-9 * (hi - lo) || v >= hi - 1e-9 * (hi - lo);
   };
-  std::vector<std::string> bounded;
+  std::vector<EffectKind>& bounded = result.on_bound;
+  bounded.clear();
   if (options.Enabled(EffectKind::kDelay) &&
       at_bound(result.effects.delay_s, options.delay_search_min_s, options.delay_search_max_s))
-    bounded.push_back("delay_s");
+    bounded.push_back(EffectKind::kDelay);
   if (options.Enabled(EffectKind::kMotorLag) && result.effects.motor_tau_s >= options.max_motor_tau_s * (1 - 1e-9))
-    bounded.push_back("motor_tau_s");
-  for (int a = 0; a < 3; ++a) {
-    if (options.Enabled(EffectKind::kAccBias) &&
-        std::abs(result.effects.acc_bias[a]) >= options.max_acc_bias_mps2 * (1 - 1e-9))
-      bounded.push_back("acc_bias");
-    if (options.Enabled(EffectKind::kGyroBias) &&
-        std::abs(result.effects.gyro_bias[a]) >= options.max_gyro_bias_radps * (1 - 1e-9))
-      bounded.push_back("gyro_bias");
-  }
-  for (const std::string& name : bounded)
-    result.warnings.push_back(name +
+    bounded.push_back(EffectKind::kMotorLag);
+  if (options.Enabled(EffectKind::kAccBias) &&
+      result.effects.acc_bias.cwiseAbs().maxCoeff() >= options.max_acc_bias_mps2 * (1 - 1e-9))
+    bounded.push_back(EffectKind::kAccBias);
+  if (options.Enabled(EffectKind::kGyroBias) &&
+      result.effects.gyro_bias.cwiseAbs().maxCoeff() >= options.max_gyro_bias_radps * (1 - 1e-9))
+    bounded.push_back(EffectKind::kGyroBias);
+  for (EffectKind kind : bounded)
+    result.warnings.push_back(std::string(EffectParameterName(kind)) +
                               " ended on the bound of its physical range: these flights do not determine it "
                               "(or the residual has a cause outside the modelled effects); do not trust it");
   result.linear_criterion = linear_criterion;

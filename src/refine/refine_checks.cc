@@ -10,24 +10,15 @@ bool OnBound(double value, double low, double high) {
   return value <= low + tolerance || value >= high - tolerance;
 }
 
-// Effects whose estimate is not finite, and those that sit on the bound of their range.
-std::vector<Check> EffectChecks(const RefineResult& refined, const RefineOptions& options, const std::string& label) {
+// Effects whose estimate is not finite, and those that sit on the bound of their range (as Refine found).
+std::vector<Check> EffectChecks(const RefineResult& refined, const std::string& label) {
   std::string not_finite, bounded;
   for (EffectKind kind : refined.enabled) {
     if (!refined.effects.Get(kind).allFinite() || !refined.effects_std.Get(kind).allFinite())
       not_finite += (not_finite.empty() ? "" : ", ") + std::string(EffectParameterName(kind));
   }
-  const Effects& e = refined.effects;
-  if (options.Enabled(EffectKind::kDelay) && OnBound(e.delay_s, options.delay_search_min_s, options.delay_search_max_s))
-    bounded += "delay_s";
-  if (options.Enabled(EffectKind::kMotorLag) && OnBound(e.motor_tau_s, 0.0, options.max_motor_tau_s))
-    bounded += std::string(bounded.empty() ? "" : ", ") + "motor_tau_s";
-  if (options.Enabled(EffectKind::kAccBias) &&
-      e.acc_bias.cwiseAbs().maxCoeff() >= options.max_acc_bias_mps2 * (1 - 1e-6))
-    bounded += std::string(bounded.empty() ? "" : ", ") + "acc_bias";
-  if (options.Enabled(EffectKind::kGyroBias) &&
-      e.gyro_bias.cwiseAbs().maxCoeff() >= options.max_gyro_bias_radps * (1 - 1e-6))
-    bounded += std::string(bounded.empty() ? "" : ", ") + "gyro_bias";
+  for (EffectKind kind : refined.on_bound)
+    bounded += (bounded.empty() ? "" : ", ") + std::string(EffectParameterName(kind));
   std::vector<Check> checks;
   if (!not_finite.empty())
     checks.push_back({"effects_finite", CheckStatus::kError, label + ": NaN or inf in " + not_finite});
@@ -45,21 +36,37 @@ void Append(std::vector<Check>* to, std::vector<Check> from) {
   for (Check& c : from) to->push_back(std::move(c));
 }
 
+// The parameter checks of a refined model. Without a covariance (not asked for, as in ablation, or a
+// rank-deficient joint Jacobian: a delay and a lag both near zero are the same to first order) every
+// std is 0 meaning "not known", not "exactly determined"; the confounded coordinates are named.
+std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, const RefineResult& refined,
+                                          const std::string& label) {
+  CheckedParameters parameters = CheckedFromSolution(linear.system, refined.refined);
+  if (!refined.has_covariance) parameters.std.clear();
+  std::vector<Check> checks = CheckParameters(parameters, linear.system.config_names, label);
+  if (refined.rank_deficient) {
+    std::string names;
+    for (const std::string& n : refined.confounded) names += (names.empty() ? "" : ", ") + n;
+    checks.push_back({"refined_identifiable", CheckStatus::kWarning,
+                      label + ": the refined parameters are not jointly identifiable (confounded: " + names +
+                          "), so no std is reported; refine fewer effects (rotorid ablate compares subsets)"});
+  }
+  return checks;
+}
+
 }  // namespace
 
 std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
-                                   const RefineOptions& options, const std::string& label) {
-  std::vector<Check> checks =
-      CheckParameters(CheckedFromSolution(linear.system, refined.refined), linear.system.config_names, label);
-  Append(&checks, EffectChecks(refined, options, label));
+                                   const std::string& label) {
+  std::vector<Check> checks = RefinedParameterChecks(linear, refined, label);
+  Append(&checks, EffectChecks(refined, label));
   Append(&checks, CheckRelativeError(refined.relative_error_pct, label, /*held_out=*/false));
   return checks;
 }
 
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
                               const DelayOptions& options) {
-  std::vector<Check> checks = CheckParameters(CheckedFromSolution(linear.system, estimate.refined.refined),
-                                              linear.system.config_names, "delay");
+  std::vector<Check> checks = RefinedParameterChecks(linear, estimate.refined, "delay");
   if (!std::isfinite(estimate.delay_s) || !std::isfinite(estimate.delay_std_s) ||
       !std::isfinite(estimate.motor_tau_s) || !std::isfinite(estimate.motor_tau_std_s))
     checks.push_back({"effects_finite", CheckStatus::kError, "delay: the delay or its std is NaN or inf"});

@@ -21,7 +21,8 @@ nlohmann::json RefineOptionsJson(const RefineOptions& options) {
           {"max_iterations", options.max_iterations}};
 }
 
-nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled) {
+nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled,
+                           const std::vector<EffectKind>& on_bound) {
   nlohmann::json out = nlohmann::json::object();
   for (EffectKind kind : kAllEffectKinds) {
     const bool on = std::find(enabled.begin(), enabled.end(), kind) != enabled.end();
@@ -33,6 +34,7 @@ nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const s
       entry = {{"value", VectorJson(v)}, {"std", VectorJson(s)}};
     }
     entry["enabled"] = on;
+    entry["on_bound"] = std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end();
     out[EffectParameterName(kind)] = entry;
   }
   return out;
@@ -52,7 +54,7 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
     correlation.push_back(row);
   }
   return {{"parameters", ParametersJson(linear.system.parameter_names, refined.refined)},
-          {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled)},
+          {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled, refined.on_bound)},
           {"relative_error_pct", ComponentsJson(refined.relative_error_pct)},
           {"effect_correlation", {{"labels", refined.effect_labels}, {"matrix", correlation}}},
           {"criterion", {{"linear", Number(refined.linear_criterion)}, {"refined", Number(refined.refined_criterion)}}},

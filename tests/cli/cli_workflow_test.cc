@@ -219,7 +219,10 @@ TEST(CliWorkflowRealTest, UlogCommandSignalIsNamed) {
                                     << "  - {position: [-0.11, -0.11, 0], spin: -1}\n";
   const auto r = RunRotorid({"identify", "--vehicle", dir + "/quad.yaml", "--log", *log, "--rotor-signal", "command",
                              "--allow-partial", "--json", dir + "/u.json"});
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // This log is too slow for identification (motors at 10 Hz, SOURCE.md): the checks say so with
+  // exit 3 (Table III above 100 %), and the report is still written.
+  ASSERT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("check relative_error: error"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("note: the rotor signal is the motor command"), std::string::npos) << r.out;
   const nlohmann::json flight = LoadJson(dir + "/u.json")["input"]["flights"][0];
   EXPECT_EQ(flight["format"], "px4_ulog");

@@ -244,7 +244,11 @@ TEST(BlackboxCli, IdentifyReadsTheTuDelftLogDirectly) {
   const testing::CommandResult run =
       testing::RunRotorid({"identify", "--vehicle", vehicle, "--log", *path, "--cutoff-hz", "30", "--all-parameters",
                            "--allow-partial", "--json", dir + "/id.json"});
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // The yaw equation misses the rotor-acceleration term this vehicle shows (docs/blackbox.md): with
+  // kd forced in (--all-parameters) Mz's Table III exceeds 100 % and the checks exit 3, report written.
+  ASSERT_EQ(run.exit_code, 3) << run.err;
+  EXPECT_NE(run.err.find("check relative_error: error: linear: relative error above 100 % (Mz"), std::string::npos)
+      << run.err;
   const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/id.json"));
   const double kt = report.at("linear").at("parameters").at("kt").at("value").get<double>();
   EXPECT_NEAR(kt / 0.3, 0.621e-6, 0.05e-6);  // the vehicle file's placeholder mass: 0.3 kg

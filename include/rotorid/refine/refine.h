@@ -65,6 +65,8 @@ struct RefineResult {
   Effects effects;
   Effects effects_std;
   std::vector<EffectKind> enabled;
+  // Enabled effects whose estimate ended on the bound of its physical range (not an estimate).
+  std::vector<EffectKind> on_bound;
   // Correlation matrix of the enabled effects' scalar parameters, with their labels
   // (delay_s, motor_tau_s, acc_bias_x, ...).
   std::vector<std::string> effect_labels;
@@ -75,6 +77,9 @@ struct RefineResult {
   // Factor by which autocorrelated residuals inflate the parameter variance (already applied).
   double autocorrelation_factor = 1.0;
   SolverReport solver;
+  // The std of the refined parameters and effects were computed (options.compute_covariance and a
+  // full-rank problem); otherwise they are 0 meaning "not known".
+  bool has_covariance = false;
   // The joint problem was rank-deficient: these parameters and effect coordinates span its null space.
   bool rank_deficient = false;
   std::vector<std::string> confounded;

@@ -12,9 +12,10 @@
 
 namespace rotorid {
 
-// `label` names the model in the messages ("refined", "delay,motor_lag", ...).
+// `label` names the model in the messages ("refined", "delay,motor_lag", ...). Effects on their
+// bounds are the ones Refine reported (RefineResult::on_bound).
 std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
-                                   const RefineOptions& options, const std::string& label = "refined");
+                                   const std::string& label = "refined");
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
                               const DelayOptions& options);
 

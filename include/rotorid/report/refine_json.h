@@ -10,8 +10,9 @@
 namespace rotorid {
 
 nlohmann::json RefineOptionsJson(const RefineOptions& options);
-// {"delay_s": {"value", "std", "enabled"}, ...} for every effect parameter.
-nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled);
+// {"delay_s": {"value", "std", "enabled", "on_bound"}, ...} for every effect parameter.
+nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled,
+                           const std::vector<EffectKind>& on_bound = {});
 nlohmann::json SolverJson(const SolverReport& solver);
 // The "refined" block.
 nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResult& refined);
