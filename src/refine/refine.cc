@@ -164,31 +164,17 @@ std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std:
   ceres::Problem::EvaluateOptions evaluate;
   for (const double* b : blocks) evaluate.parameter_blocks.push_back(const_cast<double*>(b));
   ceres::CRSMatrix crs;
+  // Ceres returns the Jacobian in tangent coordinates already (chi's SubsetManifold drops the
+  // fixed entries, the quaternion's tangent is 3-d); a column scaling makes the SVD see
+  // directions, not units.
   problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
-  // Ambient Jacobian -> tangent: chi's tangent drops the fixed entries, the quaternion's is 3-d;
-  // a column scaling makes the SVD see directions, not units.
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  Eigen::MatrixXd tangent_jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
   for (int r = 0; r < crs.num_rows; ++r)
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jac(r, crs.cols[k]) = crs.values[k];
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) tangent_jac(r, crs.cols[k]) = crs.values[k];
   std::vector<std::string> labels;
-  Eigen::MatrixXd tangent_jac(crs.num_rows, 0);
-  int column = 0;
-  for (const double* b : blocks) {
-    const int ambient = problem->ParameterBlockSize(b);
-    const int tangent = problem->ParameterBlockTangentSize(b);
-    Eigen::MatrixXd plus_jacobian = Eigen::MatrixXd::Identity(ambient, tangent);
-    if (const ceres::Manifold* manifold = problem->GetManifold(b)) {
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> pj(ambient, tangent);
-      manifold->PlusJacobian(b, pj.data());
-      plus_jacobian = pj;
-    }
-    Eigen::MatrixXd block_jac = jac.middleCols(column, ambient) * plus_jacobian;
-    tangent_jac.conservativeResize(Eigen::NoChange, tangent_jac.cols() + tangent);
-    tangent_jac.rightCols(tangent) = block_jac;
-    column += ambient;
-  }
   for (int k : free) labels.push_back(system.parameter_names[k]);
   labels.insert(labels.end(), effect_labels.begin(), effect_labels.end());
+  CHECK_EQ(static_cast<Eigen::Index>(labels.size()), tangent_jac.cols());
   const Eigen::VectorXd norms = tangent_jac.colwise().norm().transpose().cwiseMax(1e-300);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(tangent_jac * norms.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
@@ -196,7 +182,7 @@ std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std:
   for (Eigen::Index j = 0; j < sv.size(); ++j) {
     if (sv[j] > 1e-7 * sv[0]) continue;
     const Eigen::VectorXd v = svd.matrixV().col(j);
-    for (Eigen::Index k = 0; k < v.size() && k < static_cast<Eigen::Index>(labels.size()); ++k)
+    for (Eigen::Index k = 0; k < v.size(); ++k)
       if (std::abs(v[k]) > 0.2 && std::find(names.begin(), names.end(), labels[k]) == names.end())
         names.push_back(labels[k]);
   }
