@@ -1,10 +1,9 @@
 #include "diagnosis/linearization.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Eigenvalues>
 
 #include "diagnosis/statistics.h"
 #include "rotorid/core/error.h"
@@ -18,22 +17,6 @@ namespace rotorid::internal {
 namespace {
 
 constexpr int kComponents = kNumWrenchComponents;
-
-// Central-difference steps: small against realistic sizes, large against round-off. Biases enter
-// the rows at most quadratically and the rotor signal piecewise linearly in delay, so central
-// differences are (nearly) exact.
-double DifferenceStep(EffectKind kind) {
-  switch (kind) {
-    case EffectKind::kDelay: return 2e-4;
-    case EffectKind::kMotorLag: return 2e-4;
-    case EffectKind::kAccBias: return 1e-2;
-    case EffectKind::kGyroBias: return 1e-3;
-    case EffectKind::kMisalignment: return 1e-3;
-  }
-  return 1e-4;
-}
-
-bool ActsOnRotorSignal(EffectKind kind) { return kind == EffectKind::kDelay || kind == EffectKind::kMotorLag; }
 
 // Column of W that a named parameter multiplies in this flight, or -1.
 int ColumnOf(const std::string& name, const Vehicle& vehicle) {
@@ -84,11 +67,7 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
   return out;
 }
 
-std::vector<std::string> EffectLabels(EffectKind kind) {
-  const std::string name = EffectParameterName(kind);
-  if (EffectDimension(kind) == 1) return {name};
-  return {name + "_x", name + "_y", name + "_z"};
-}
+std::vector<std::string> EffectLabels(EffectKind kind) { return kind->Labels(EffectDimension(kind)); }
 
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
@@ -116,18 +95,17 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
     // The IMU effects do not touch the rotor signal: compute the delayed and lagged rotor entries
     // once and difference the IMU effects on a copy that carries them (delay and lag then 0).
-    const bool rotor_effects = effects.delay_s != 0.0 || effects.motor_tau_s != 0.0;
     ProcessedFlight shifted_storage;
     const ProcessedFlight* imu_flight = &flight;
-    if (rotor_effects) {
-      shifted_storage = flight;
-      shifted_storage.rotor = FilteredRotorSpeed(
-          flight.filter, DelayedLaggedRotorSquared<double>(flight, effects.delay_s, effects.motor_tau_s));
-      imu_flight = &shifted_storage;
-    }
     Effects imu_effects = effects;
-    imu_effects.delay_s = 0.0;
-    imu_effects.motor_tau_s = 0.0;
+    if (!effects.StageIsZero(EffectStage::kRotorSignal)) {
+      shifted_storage = flight;
+      shifted_storage.rotor =
+          FilteredRotorSpeed(flight.filter, RotorSignalWithEffects(flight, effects).array().square().matrix());
+      imu_flight = &shifted_storage;
+      for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal))
+        imu_effects.Set(kind, Eigen::VectorXd::Zero(EffectDimension(kind)));
+    }
     const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(*imu_flight, imu_effects);
     const Eigen::Index rows = w.rows();
     const Eigen::VectorXd rho = w * chi_t;
@@ -160,11 +138,11 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     }
     Eigen::Index column = 0;
     for (EffectKind kind : kinds) {
-      const double h = DifferenceStep(kind);
+      const double h = kind->info().difference_step;
       for (int a = 0; a < EffectDimension(kind); ++a, ++column) {
         Eigen::VectorXd w_plus_minus[2];
         for (int side = 0; side < 2; ++side) {
-          const bool on_rotor = ActsOnRotorSignal(kind);
+          const bool on_rotor = kind->stage() == EffectStage::kRotorSignal;
           Effects perturbed = on_rotor ? effects : imu_effects;
           Eigen::VectorXd value = perturbed.Get(kind);
           value[a] += side == 0 ? h : -h;
@@ -230,7 +208,8 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
   fit.correlation = inverse_std.asDiagonal() * effect_cov * inverse_std.asDiagonal();
   fit.effective_samples = static_cast<double>(n) / linearization.autocorrelation_factor;
   // Signatures with chi projected out.
-  const Eigen::MatrixXd projected = effect_columns - chi_columns * (chi_inverse * (chi_columns.transpose() * effect_columns));
+  const Eigen::MatrixXd projected =
+      effect_columns - chi_columns * (chi_inverse * (chi_columns.transpose() * effect_columns));
   fit.residual_correlation.resize(e);
   const double r_norm = r.norm();
   for (Eigen::Index c = 0; c < e; ++c) {

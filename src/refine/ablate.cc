@@ -16,10 +16,12 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
   if (effects.size() > 8) throw Error("ablation over more than 8 effects (256 refinements) is not supported");
   if (const std::string problem = base.Validate(); !problem.empty()) throw Error(problem);
   const int subsets = 1 << effects.size();
-  // Every subset with a delay would start from the same global delay search: do it once.
+  // Every subset with a grid-searched effect (the delay) would start from the same global search:
+  // do it once.
   RefineOptions shared = base;
-  if (shared.coarse_delay_search && std::find(effects.begin(), effects.end(), EffectKind::kDelay) != effects.end()) {
-    shared.initial.delay_s = CoarseDelaySearch(linear, shared);
+  if (shared.coarse_delay_search) {
+    for (EffectKind kind : effects)
+      if (kind->info().grid_searched) shared.initial.Set(kind, CoarseDelaySearch(linear, base, kind));
     shared.coarse_delay_search = false;
   }
   AblationResult out;
@@ -35,8 +37,9 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
           if (s & (1 << k)) entry.effects.push_back(effects[k]);
         RefineOptions options = shared;
         options.effects = entry.effects;
-        // Subsets without the delay keep it at the caller's initial value, not the search's.
-        if (!options.Enabled(EffectKind::kDelay)) options.initial.delay_s = base.initial.delay_s;
+        // Subsets without a searched effect keep it at the caller's initial value, not the search's.
+        for (EffectKind kind : effects)
+          if (!options.Enabled(kind)) options.initial.Set(kind, base.initial.Get(kind));
         options.num_threads = 1;
         options.compute_covariance = false;
         entry.result = Refine(linear, options);

@@ -8,6 +8,11 @@
 
 namespace rotorid {
 
+EffectKind DelayEffect() {
+  static const EffectKind kind = ParseEffectKind("delay");
+  return kind;
+}
+
 std::string DelayOptions::Validate() const {
   if (!(max_s > min_s)) return "delay search range is empty (max must exceed min)";
   if (!(step_s > 0.0)) return "delay search step must be positive";
@@ -25,7 +30,7 @@ std::vector<double> DelayCriterionCurve(const IdentificationResult& linear, cons
     pool.emplace_back([&, t]() {
       for (size_t i = t; i < delays_s.size(); i += threads) {
         Effects effects;
-        effects.delay_s = delays_s[i];
+        effects.Set(DelayEffect(), delays_s[i]);
         criterion[i] = EffectCriterion(linear, effects);
       }
     });
@@ -45,16 +50,17 @@ DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptio
     out.warnings.push_back("the best delay lies at the edge of the searched range [" + std::to_string(options.min_s) +
                            ", " + std::to_string(options.max_s) + "] s; widen it");
   RefineOptions refine;
-  refine.effects = {EffectKind::kDelay};
-  if (options.with_motor_lag) refine.effects.push_back(EffectKind::kMotorLag);
+  const EffectKind lag = ParseEffectKind("motor_lag");
+  refine.effects = {DelayEffect()};
+  if (options.with_motor_lag) refine.effects.push_back(lag);
   refine.coarse_delay_search = false;
-  refine.initial.delay_s = out.grid_best_s;
+  refine.initial.Set(DelayEffect(), out.grid_best_s);
   refine.num_threads = options.num_threads;
   out.refined = Refine(linear, refine);
-  out.delay_s = out.refined.effects.delay_s;
-  out.delay_std_s = out.refined.effects_std.delay_s;
-  out.motor_tau_s = out.refined.effects.motor_tau_s;
-  out.motor_tau_std_s = out.refined.effects_std.motor_tau_s;
+  out.delay_s = out.refined.effects.Scalar(DelayEffect());
+  out.delay_std_s = out.refined.effects_std.Scalar(DelayEffect());
+  out.motor_tau_s = out.refined.effects.Scalar(lag);
+  out.motor_tau_std_s = out.refined.effects_std.Scalar(lag);
   // The refinement must stay in the basin the global search found.
   if (std::abs(out.delay_s - out.grid_best_s) > 3 * options.step_s)
     out.warnings.push_back("the refined delay moved " + std::to_string(1000 * (out.delay_s - out.grid_best_s)) +

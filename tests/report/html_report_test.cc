@@ -123,7 +123,7 @@ class HtmlReportTest : public ::testing::Test {
                        {"relative_error_pct", {{"Fz", 1.4}, {"Mx", 5.9}, {"My", 6.9}}}}}}};
     input.flights = {{"identification flight", &result_->flights[0], false}, {"held-out flight", held_out_, true}};
     Effects delay;
-    delay.delay_s = 0.02;
+    delay.Set("delay_s", 0.02);
     std::map<std::string, double> refined_values;
     for (const auto& [name, entry] : refined["parameters"].items()) refined_values[name] = entry["value"].get<double>();
     input.parameter_sets = {{"linear", LinearValues(), Effects()}, {"refined", refined_values, delay}};
@@ -172,7 +172,7 @@ TEST_F(HtmlReportTest, WrenchSplitSidesDifferByTheEquationError) {
 
 TEST_F(HtmlReportTest, RefinedEffectsShrinkTheErrorOfADelayedLog) {
   Effects delay;
-  delay.delay_s = 0.02;
+  delay.Set("delay_s", 0.02);
   const WrenchSplit linear = ComputeWrenchSplit(*held_out_, LinearValues(), Effects());
   const WrenchSplit with_delay = ComputeWrenchSplit(*held_out_, LinearValues(), delay);
   EXPECT_LT(*with_delay.relative_error_pct[3], *linear.relative_error_pct[3]);
