@@ -15,6 +15,8 @@
 #include "diagnosis/held_out.h"
 #include "diagnosis/linearization.h"
 #include "diagnosis/statistics.h"
+#include "refine/grid_search.h"
+#include "refine/parallel_for.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/refine/refine.h"
@@ -59,21 +61,7 @@ std::vector<EffectKind> KindsOf(EffectMask mask) {
   return kinds;
 }
 
-// Runs task(i) for i in [0, count) on up to `threads` threads.
-void ParallelFor(int count, int threads, const std::function<void(int)>& task) {
-  const int workers = std::max(1, std::min(threads, count));
-  if (workers == 1) {
-    for (int i = 0; i < count; ++i) task(i);
-    return;
-  }
-  std::atomic<int> next{0};
-  std::vector<std::thread> pool;
-  for (int w = 0; w < workers; ++w)
-    pool.emplace_back([&]() {
-      for (int i = next++; i < count; i = next++) task(i);
-    });
-  for (std::thread& t : pool) t.join();
-}
+using internal::ParallelFor;
 
 // One model (a set of effects) fitted in every fold, and its held-out residual.
 struct ModelRecord {
@@ -234,8 +222,11 @@ std::string Join(const std::vector<EffectKind>& kinds) {
 // grid-searched one the search range in steps of 10 ms; empty for the others.
 std::vector<double> ScreeningGrid(EffectKind kind, const DiagnosisOptions& options) {
   std::vector<double> grid = kind->info().screening_grid;
-  if (kind->info().grid_searched)
-    for (double d = options.delay_search_min_s; d <= options.delay_search_max_s + 1e-12; d += 0.01) grid.push_back(d);
+  if (kind->info().grid_searched) {
+    const std::vector<double> search =
+        internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, 0.01);
+    grid.insert(grid.end(), search.begin(), search.end());
+  }
   return grid;
 }
 
@@ -246,12 +237,7 @@ double GridShrinkPct(const IdentificationResult& full, const Effects& base, Effe
   const std::vector<double> grid = ScreeningGrid(kind, options);
   const double without = EffectCriterion(full, base);
   if (!(without > 0.0)) return 0.0;
-  std::vector<double> criterion(grid.size());
-  ParallelFor(static_cast<int>(grid.size()), options.num_threads, [&](int i) {
-    Effects trial = base;
-    trial.Set(kind, Eigen::VectorXd::Constant(1, grid[i]));
-    criterion[i] = EffectCriterion(full, trial);
-  });
+  const std::vector<double> criterion = internal::CriterionOverGrid(full, base, kind, grid, options.num_threads);
   const double best = std::min(without, *std::min_element(criterion.begin(), criterion.end()));
   return 100.0 * (1.0 - best / without);
 }
@@ -358,16 +344,10 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     delay_searched = true;
     const EffectKind searched =
         *std::find_if(AllEffects().begin(), AllEffects().end(), [](EffectKind k) { return k->info().grid_searched; });
-    std::vector<double> grid;
-    for (double d = options.delay_search_min_s; d <= options.delay_search_max_s + 1e-12;
-         d += options.delay_search_step_s)
-      grid.push_back(d);
-    std::vector<double> criterion(grid.size());
-    ParallelFor(static_cast<int>(grid.size()), options.num_threads, [&](int i) {
-      Effects trial;
-      trial.Set(searched, grid[i]);
-      criterion[i] = EffectCriterion(full, trial);
-    });
+    const std::vector<double> grid =
+        internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s);
+    const std::vector<double> criterion =
+        internal::CriterionOverGrid(full, Effects{}, searched, grid, options.num_threads);
     diagnosis.initial_delay_s = grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
     mark("coarse delay search");
   };

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
+#include "refine/grid_search.h"
 #include "rotorid/core/error.h"
 
 namespace rotorid {
@@ -23,26 +23,13 @@ std::string DelayOptions::Validate() const {
 
 std::vector<double> DelayCriterionCurve(const IdentificationResult& linear, const std::vector<double>& delays_s,
                                         int num_threads) {
-  std::vector<double> criterion(delays_s.size(), 0.0);
-  const int threads = std::max(1, std::min<int>(num_threads, static_cast<int>(delays_s.size())));
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    pool.emplace_back([&, t]() {
-      for (size_t i = t; i < delays_s.size(); i += threads) {
-        Effects effects;
-        effects.Set(DelayEffect(), delays_s[i]);
-        criterion[i] = EffectCriterion(linear, effects);
-      }
-    });
-  }
-  for (std::thread& thread : pool) thread.join();
-  return criterion;
+  return internal::CriterionOverGrid(linear, Effects{}, DelayEffect(), delays_s, num_threads);
 }
 
 DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   DelayEstimate out;
-  for (double d = options.min_s; d <= options.max_s + 1e-12; d += options.step_s) out.grid_s.push_back(d);
+  out.grid_s = internal::SearchGrid(options.min_s, options.max_s, options.step_s);
   out.criterion = DelayCriterionCurve(linear, out.grid_s, options.num_threads);
   const size_t best = std::min_element(out.criterion.begin(), out.criterion.end()) - out.criterion.begin();
   out.grid_best_s = out.grid_s[best];

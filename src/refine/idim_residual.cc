@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "refine/effect_rows.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/model/rigid_body.h"
 
@@ -50,73 +51,32 @@ IdimResidualBlock::IdimResidualBlock(const ProcessedFlight* flight, const RotorS
   for (EffectKind kind : blocks->free) mutable_parameter_block_sizes()->push_back(kind->Dimension(flight->vehicle));
 }
 
-// What every pass shares: the criterion's scale, chi, the effect values and the rotor signal.
+// What every pass shares: the criterion's scale, chi and the effect-laden rows.
 struct IdimResidualBlock::Point {
-  Effects effects;
-  std::shared_ptr<const RotorSignalCache::State> rotor;
   Eigen::VectorXd n_chi;
   double d = 0.0, d_sq = 0.0;
   Eigen::Matrix<double, kNumIdimColumns, 1> flight_chi;
-  // The free scalar coordinates: block (index into blocks_->free) and coordinate; the rotor-signal
-  // ones also index the cached derivatives.
-  struct Coordinate {
-    int block, index, rotor_derivative;
-  };
-  std::vector<Coordinate> coordinates;
+  std::shared_ptr<const RotorSignalCache::State> rotor;
+  std::unique_ptr<EffectRows> rows;
 };
 
 template <typename T>
 void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate, double* residuals,
                                      double** jacobians) const {
-  constexpr bool kIsJet = !std::is_same_v<T, double>;
   const int p = context_->num_parameters;
   const int c0 = IdimSystem::ConfigColumn(config_);
-  const EffectiveRotor& rotor = point.rotor->rotor;
-  // The coordinates differentiated in this pass and their Jet slots.
-  std::vector<std::pair<const Point::Coordinate*, int>> slots;
-  if constexpr (kIsJet) {
-    const size_t last = std::min(point.coordinates.size(), first_coordinate + T::DIMENSION);
-    for (size_t c = first_coordinate; c < last; ++c)
-      slots.emplace_back(&point.coordinates[c], static_cast<int>(c - first_coordinate));
-  }
-  // IMU effects: every one that acts (non-zero or free), in chain order.
-  std::vector<EffectKind> chain;
-  std::vector<Eigen::Matrix<T, Eigen::Dynamic, 1>> values;
-  for (EffectKind kind : EffectsOfStage(EffectStage::kImuSensor)) {
-    const auto it = std::find(blocks_->free.begin(), blocks_->free.end(), kind);
-    if (it == blocks_->free.end() && point.effects.IsZero(kind)) continue;
-    chain.push_back(kind);
-    values.push_back(point.effects.Get(kind).cast<T>());
-    if constexpr (kIsJet)
-      for (const auto& [coordinate, slot] : slots)
-        if (blocks_->free[coordinate->block] == kind) values.back()[coordinate->index].v[slot] = 1.0;
-  }
-  std::vector<const T*> parameters;
-  for (const auto& v : values) parameters.push_back(v.data());
-
-  const int rotors = flight_->vehicle.num_rotors();
-  Eigen::Matrix<T, Eigen::Dynamic, 1> omega(rotors);
+  const std::vector<EffectRows::Coordinate>& coordinates = point.rows->coordinates();
+  size_t last_coordinate = first_coordinate;
+  if constexpr (!std::is_same_v<T, double>)
+    last_coordinate = std::min(coordinates.size(), first_coordinate + T::DIMENSION);
   for (int s = 0; s < count_; ++s) {
-    const int row_sample = first_ + s;
-    const int i = flight_->row_samples[row_sample];
-    for (int k = 0; k < rotors; ++k) {
-      omega[k] = T(rotor.speed(row_sample, k));
-      if constexpr (kIsJet)
-        for (const auto& [coordinate, slot] : slots)
-          if (coordinate->rotor_derivative >= 0)
-            omega[k].v[slot] = rotor.derivative[coordinate->rotor_derivative](row_sample, k);
-    }
-    ImuSample<T> imu = LoggedImu<T>(*flight_, i);
-    CorrectImu<T>(chain, parameters, &imu);
-    const Eigen::Matrix<T, 6, kNumIdimColumns> rows =
-        IdimRows<T>(imu.angular_velocity, imu.angular_acceleration, imu.specific_force, omega, flight_->vehicle);
+    const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, first_coordinate);
     for (int c = 0; c < 6; ++c) {
       const int out = 6 * s + c;
       const double scale = sqrt_weight_[out] / point.d;
       T e(0.0);
       for (int k = 0; k < kNumIdimColumns; ++k) e += rows(c, k) * point.flight_chi[k];
-      const double e_value = ScalarPart(e);
-      if (first_coordinate == 0) residuals[out] = scale * e_value;
+      if (first_coordinate == 0) residuals[out] = scale * ScalarPart(e);
       if (!jacobians) continue;
       if (first_coordinate == 0 && jacobians[0]) {
         double* j = jacobians[0] + static_cast<size_t>(out) * p;
@@ -126,12 +86,13 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
         for (int k = 0; k < kNumBodyParameters; ++k) j[c0 + k] += scale * ScalarPart(rows(c, 2 + k));
         for (int k = 0; k < p; ++k) j[k] *= context_->chi_scale[k];
       }
-      if constexpr (kIsJet)
-        for (const auto& [coordinate, slot] : slots) {
-          double* j = jacobians[1 + coordinate->block];
+      if constexpr (!std::is_same_v<T, double>)
+        for (size_t k = first_coordinate; k < last_coordinate; ++k) {
+          const EffectRows::Coordinate& coordinate = coordinates[k];
+          double* j = jacobians[1 + coordinate.effect];
           if (!j) continue;
-          const int size = parameter_block_sizes()[1 + coordinate->block];
-          j[out * size + coordinate->index] = scale * e.v[slot];
+          const int size = parameter_block_sizes()[1 + coordinate.effect];
+          j[out * size + coordinate.index] = scale * e.v[k - first_coordinate];
         }
     }
   }
@@ -148,22 +109,18 @@ bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residu
   point.d = std::sqrt(point.d_sq);
   const int c0 = IdimSystem::ConfigColumn(config_);
   point.flight_chi << chi_t[0], chi_t[1], chi_t.segment(c0, kNumBodyParameters), 1.0;
-  point.effects = blocks_->At(parameters, flight_->vehicle);
-  point.rotor = rotor_->Get(point.effects);
-  int rotor_derivative = 0;
-  for (size_t b = 0; b < blocks_->free.size(); ++b) {
-    const bool on_rotor = blocks_->free[b]->stage() == EffectStage::kRotorSignal;
-    for (int a = 0; a < parameter_block_sizes()[1 + b]; ++a)
-      point.coordinates.push_back({static_cast<int>(b), a, on_rotor ? rotor_derivative++ : -1});
-  }
+  const Effects effects = blocks_->At(parameters, flight_->vehicle);
+  point.rotor = rotor_->Get(effects);
+  point.rows = std::make_unique<EffectRows>(flight_, effects, blocks_->free, &point.rotor->rotor);
+  const size_t coordinates = point.rows->coordinates().size();
   bool effect_jacobians = false;
   for (size_t b = 0; jacobians && b < blocks_->free.size(); ++b) effect_jacobians |= jacobians[1 + b] != nullptr;
-  if (!effect_jacobians || point.coordinates.empty()) {
+  if (!effect_jacobians || coordinates == 0) {
     EvaluatePass<double>(point, 0, residuals, jacobians);
-  } else if (point.coordinates.size() <= kImuJetSize) {
+  } else if (coordinates <= static_cast<size_t>(kImuJetSize)) {
     EvaluatePass<ImuJet>(point, 0, residuals, jacobians);
   } else {
-    for (size_t first = 0; first < point.coordinates.size(); first += kWideImuJetSize)
+    for (size_t first = 0; first < coordinates; first += kWideImuJetSize)
       EvaluatePass<WideImuJet>(point, first, residuals, jacobians);
   }
   return true;

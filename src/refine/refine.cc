@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 
+#include "refine/grid_search.h"
 #include "refine/idim_residual.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/rigid_body.h"
@@ -383,18 +384,11 @@ std::vector<std::string> BoundWarnings(const RefineResult& result, const RefineO
 }  // namespace
 
 double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind) {
-  Effects trial = options.initial;
-  double best = INFINITY, best_value = options.initial.Scalar(kind);
-  for (double value = options.delay_search_min_s; value <= options.delay_search_max_s + 1e-12;
-       value += options.delay_search_step_s) {
-    trial.Set(kind, value);
-    const double criterion = EffectCriterion(linear, trial);
-    if (criterion < best) {
-      best = criterion;
-      best_value = value;
-    }
-  }
-  return best_value;
+  const std::vector<double> grid =
+      internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s);
+  const std::vector<double> criterion =
+      internal::CriterionOverGrid(linear, options.initial, kind, grid, options.num_threads);
+  return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
 }
 
 RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
