@@ -47,7 +47,6 @@ const EffectDescriptor& AccBiasEffect() {
     i.simulator_limit = {false, 0.0, 5.0};
     i.settle_tolerance = 1e-4;
     i.display_unit = "m/s^2";
-    i.difference_step = 1e-2;
     return i;
   }());
   return effect;
@@ -69,7 +68,6 @@ const EffectDescriptor& GyroBiasEffect() {
     i.simulator_limit = {false, 0.0, 0.5};
     i.settle_tolerance = 1e-4;
     i.display_unit = "rad/s";
-    i.difference_step = 1e-3;
     return i;
   }());
   return effect;

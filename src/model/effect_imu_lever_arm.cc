@@ -48,7 +48,6 @@ const EffectDescriptor& ImuLeverArmEffect() {
     i.settle_tolerance = 1e-4;  // 0.1 mm
     i.display_scale = 1e3;
     i.display_unit = "mm";
-    i.difference_step = 1e-3;  // the rows are linear in r: central differences are exact
     return i;
   }());
   return effect;

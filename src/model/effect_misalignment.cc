@@ -46,7 +46,6 @@ const EffectDescriptor& MisalignmentEffect() {
     i.settle_tolerance = 1e-5;
     i.display_scale = kRadToDeg;
     i.display_unit = "deg";
-    i.difference_step = 1e-3;
     return i;
   }());
   return effect;

@@ -60,7 +60,6 @@ const EffectDescriptor& MotorLagEffect() {
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";
-    i.difference_step = 2e-4;
     return i;
   }());
   return effect;

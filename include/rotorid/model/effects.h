@@ -113,9 +113,6 @@ class EffectDescriptor {
     std::string display_unit;
     // The flight signals its model needs (beyond gyro, accelerometer, rotor signal).
     std::vector<FlightInput> inputs;
-    // Central-difference step of the diagnosis' linearisation: small against realistic sizes,
-    // large against round-off.
-    double difference_step = 1e-4;
   };
 
   explicit EffectDescriptor(Info info) : info_(std::move(info)) {}
