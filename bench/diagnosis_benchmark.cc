@@ -9,11 +9,11 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <map>
 #include <string>
 #include <vector>
@@ -35,7 +35,6 @@ struct Case {
   std::vector<EffectKind> kinds;
 };
 
-
 // Error of an estimate in the unit of its tolerance and whether it is within it: delay +-1 ms,
 // tau +-10 %, biases within 3 std, misalignment +-0.2 deg.
 struct MagnitudeError {
@@ -46,29 +45,23 @@ struct MagnitudeError {
 MagnitudeError Score(EffectKind kind, const Eigen::VectorXd& truth, const Eigen::VectorXd& estimate,
                      const Eigen::VectorXd& std_dev) {
   MagnitudeError m;
-  switch (kind) {
-    case EffectKind::kDelay:
-      m = {1e3 * std::abs(estimate[0] - truth[0]), "ms", false};
-      m.within = m.value <= 1.0;
-      break;
-    case EffectKind::kMotorLag:
-      m = {100.0 * std::abs(estimate[0] - truth[0]) / truth[0], "%", false};
-      m.within = m.value <= 10.0;
-      break;
-    case EffectKind::kAccBias:
-    case EffectKind::kGyroBias: {
-      double worst = 0.0;
-      for (int a = 0; a < 3; ++a) worst = std::max(worst, std::abs(estimate[a] - truth[a]) / std::max(std_dev[a], 1e-300));
-      m = {worst, "std", worst <= 3.0};
-      break;
-    }
-    case EffectKind::kMisalignment: {
-      const Eigen::Matrix3d difference = ExpSO3<double>(estimate).transpose() * ExpSO3<double>(truth);
-      const double angle = std::acos(std::clamp(0.5 * (difference.trace() - 1.0), -1.0, 1.0));
-      m = {angle * 180.0 / M_PI, "deg", false};
-      m.within = m.value <= 0.2;
-      break;
-    }
+  const std::string name = kind->name();
+  if (name == "delay") {
+    m = {1e3 * std::abs(estimate[0] - truth[0]), "ms", false};
+    m.within = m.value <= 1.0;
+  } else if (name == "motor_lag") {
+    m = {100.0 * std::abs(estimate[0] - truth[0]) / truth[0], "%", false};
+    m.within = m.value <= 10.0;
+  } else if (name == "misalignment") {
+    const Eigen::Matrix3d difference = ExpSO3<double>(estimate).transpose() * ExpSO3<double>(truth);
+    const double angle = std::acos(std::clamp(0.5 * (difference.trace() - 1.0), -1.0, 1.0));
+    m = {angle * 180.0 / M_PI, "deg", false};
+    m.within = m.value <= 0.2;
+  } else {  // biases (and any vector effect): within 3 std per coordinate
+    double worst = 0.0;
+    for (Eigen::Index a = 0; a < truth.size(); ++a)
+      worst = std::max(worst, std::abs(estimate[a] - truth[a]) / std::max(std_dev[a], 1e-300));
+    m = {worst, "std", worst <= 3.0};
   }
   return m;
 }
@@ -82,9 +75,7 @@ std::string TruthString(const Case& c, const Effects& e) {
   return out.empty() ? "-" : out;
 }
 
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 // CPU time of the whole process (all threads), to compare runs on a loaded machine.
 double CpuNow() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
@@ -92,15 +83,16 @@ double CpuNow() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::vector<Case> singles = {{"delay", {EffectKind::kDelay}},
-                                     {"motor_lag", {EffectKind::kMotorLag}},
-                                     {"acc_bias", {EffectKind::kAccBias}},
-                                     {"gyro_bias", {EffectKind::kGyroBias}},
-                                     {"misalignment", {EffectKind::kMisalignment}}};
-  const std::vector<Case> pairs = {{"delay+motor_lag", {EffectKind::kDelay, EffectKind::kMotorLag}},
-                                   {"delay+acc_bias", {EffectKind::kDelay, EffectKind::kAccBias}},
-                                   {"motor_lag+misalignment", {EffectKind::kMotorLag, EffectKind::kMisalignment}},
-                                   {"acc_bias+misalignment", {EffectKind::kAccBias, EffectKind::kMisalignment}}};
+  const std::vector<Case> singles = {{"delay", {ParseEffectKind("delay")}},
+                                     {"motor_lag", {ParseEffectKind("motor_lag")}},
+                                     {"acc_bias", {ParseEffectKind("acc_bias")}},
+                                     {"gyro_bias", {ParseEffectKind("gyro_bias")}},
+                                     {"misalignment", {ParseEffectKind("misalignment")}}};
+  const std::vector<Case> pairs = {
+      {"delay+motor_lag", {ParseEffectKind("delay"), ParseEffectKind("motor_lag")}},
+      {"delay+acc_bias", {ParseEffectKind("delay"), ParseEffectKind("acc_bias")}},
+      {"motor_lag+misalignment", {ParseEffectKind("motor_lag"), ParseEffectKind("misalignment")}},
+      {"acc_bias+misalignment", {ParseEffectKind("acc_bias"), ParseEffectKind("misalignment")}}};
   const SimulationVehicle vehicle = PresetVehicle("B");
 
   auto run = [&](const Case& c, std::uint64_t seed, double seconds, int threads, Effects* truth,
@@ -129,22 +121,25 @@ int main(int argc, char** argv) {
     const double seconds = argc > 4 ? std::atof(argv[4]) : 90.0;
     Case c{label, {}};
     if (label != "clean") {
-      for (const Case& s : singles) if (s.label == label) c = s;
-      for (const Case& p : pairs) if (p.label == label) c = p;
+      for (const Case& s : singles)
+        if (s.label == label) c = s;
+      for (const Case& p : pairs)
+        if (p.label == label) c = p;
     }
     Effects truth;
     double secs = 0.0, cpu = 0.0;
     const Diagnosis d = run(c, seed, seconds, 2, &truth, &secs, &cpu);
     std::printf("truth: %s\n%s", TruthString(c, truth).c_str(), DiagnosisVerdict(d).c_str());
     for (const EffectVerdict& v : d.ranking)
-      std::printf("  %-13s %-16s shrink %7.3f %%%s F %9.2f p %8.1e  first-order %7.3f %%  alone %7.3f %%  value %s  "
-                  "detectable %s\n",
-                  EffectName(v.kind), v.status.c_str(), v.test.shrink_pct, v.test.screened ? "*" : " ",
-                  v.test.f_statistic, v.test.p_value, v.screening.shrink_pct,
-                  v.alone_test ? v.alone_test->shrink_pct : 0.0, FormatEffectMagnitude(v.kind, v.value, v.std).c_str(),
-                  FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd()).c_str());
-    std::printf("diagnosis %.2f s wall, %.2f s cpu, %d refinements, initial delay %.1f ms\n", secs, cpu,
-                d.refinements, 1e3 * d.initial_delay_s);
+      std::printf(
+          "  %-13s %-16s shrink %7.3f %%%s F %9.2f p %8.1e  first-order %7.3f %%  alone %7.3f %%  value %s  "
+          "detectable %s\n",
+          EffectName(v.kind), v.status.c_str(), v.test.shrink_pct, v.test.screened ? "*" : " ", v.test.f_statistic,
+          v.test.p_value, v.screening.shrink_pct, v.alone_test ? v.alone_test->shrink_pct : 0.0,
+          FormatEffectMagnitude(v.kind, v.value, v.std).c_str(),
+          FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd()).c_str());
+    std::printf("diagnosis %.2f s wall, %.2f s cpu, %d refinements, initial delay %.1f ms\n", secs, cpu, d.refinements,
+                1e3 * d.initial_delay_s);
     for (const auto& [phase, t] : d.phase_seconds) std::printf("  %-28s %6.2f s\n", phase.c_str(), t);
     std::printf("  component   gap %%   floor %%   model error %%   final gap %%\n");
     for (int j = 0; j < 6; ++j)
@@ -179,8 +174,8 @@ int main(int argc, char** argv) {
   std::vector<double> times, cpu_times;
   std::vector<double> clean_largest_shrink;  // per clean flight: the largest shrink of any candidate
 
-  std::printf("%-24s %4s | %-40s | %-26s | %-44s | %6s %6s\n", "case", "seed", "truth", "selected",
-              "magnitude errors", "wall s", "cpu s");
+  std::printf("%-24s %4s | %-40s | %-26s | %-44s | %6s %6s\n", "case", "seed", "truth", "selected", "magnitude errors",
+              "wall s", "cpu s");
   for (size_t n = 0; n < plan.size(); ++n) {
     const Case& c = plan[n].first;
     const std::uint64_t seed = 1000 + 37 * n;
@@ -202,7 +197,8 @@ int main(int argc, char** argv) {
     const std::string top = d.selected.empty() ? "none" : EffectName(d.selected.front());
     std::string errors;
     for (EffectKind k : c.kinds) {
-      const auto v = std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectVerdict& e) { return e.kind == k; });
+      const auto v =
+          std::find_if(d.ranking.begin(), d.ranking.end(), [&](const EffectVerdict& e) { return e.kind == k; });
       if (v == d.ranking.end() || !v->selected) continue;
       const MagnitudeError m = Score(k, truth.Get(k), v->value, v->std);
       char buffer[96];
@@ -238,7 +234,7 @@ int main(int argc, char** argv) {
       const bool below = v != d.ranking.end() && !v->selected &&
                          (truth.Get(c.kinds[0]).cwiseAbs() - v->detectable_above).maxCoeff() < 0.0;
       if (below && d.selected.empty()) {
-        if (c.kinds[0] == EffectKind::kGyroBias) ++gyro_not_detectable;
+        if (c.kinds[0] == ParseEffectKind("gyro_bias")) ++gyro_not_detectable;
       } else {
         ++detectable_total;
         detectable_hits += hit;
@@ -247,12 +243,12 @@ int main(int argc, char** argv) {
       ++pair_total;
       pair_top1 += top == EffectName(c.kinds[0]) || top == EffectName(c.kinds[1]);
       bool both = d.selected.size() == 2;
-      for (EffectKind k : c.kinds) both = both && std::find(d.selected.begin(), d.selected.end(), k) != d.selected.end();
+      for (EffectKind k : c.kinds)
+        both = both && std::find(d.selected.begin(), d.selected.end(), k) != d.selected.end();
       pair_both += both;
     }
     std::printf("%-24s %4d | %-40s | %-26s | %-44s | %6.2f %6.2f\n", c.label.c_str(), static_cast<int>(seed),
-                TruthString(c, truth).c_str(), selected.empty() ? "none" : selected.c_str(), errors.c_str(), secs,
-                cpu);
+                TruthString(c, truth).c_str(), selected.empty() ? "none" : selected.c_str(), errors.c_str(), secs, cpu);
     std::fflush(stdout);
   }
 
@@ -268,18 +264,21 @@ int main(int argc, char** argv) {
   }
   std::printf("\ntop-1 detection, single effects: %d / %d = %.1f %%\n", single_hits, single_total,
               single_total ? 100.0 * single_hits / single_total : 0.0);
-  std::printf("top-1 detection, single effects the diagnosis calls detectable at their size: %d / %d = %.1f %% "
-              "(%d gyro-bias flights reported 'not detectable' below their size)\n",
-              detectable_hits, detectable_total, detectable_total ? 100.0 * detectable_hits / detectable_total : 0.0,
-              gyro_not_detectable);
+  std::printf(
+      "top-1 detection, single effects the diagnosis calls detectable at their size: %d / %d = %.1f %% "
+      "(%d gyro-bias flights reported 'not detectable' below their size)\n",
+      detectable_hits, detectable_total, detectable_total ? 100.0 * detectable_hits / detectable_total : 0.0,
+      gyro_not_detectable);
   std::printf("false alarms on clean flights: %d / %d = %.1f %%\n", clean_alarms, clean,
               clean ? 100.0 * clean_alarms / clean : 0.0);
   std::printf("pairs: top-1 in the pair %d / %d, both found %d / %d\n", pair_top1, pair_total, pair_both, pair_total);
-  std::printf("flights reported with an indistinguishable alternative to a selected effect: %d; top-1 misses where the "
-              "withheld effect was reported as indistinguishable from the first: %d\n",
-              confounded_flags, confounded_misses);
-  std::printf("\nmagnitudes of selected withheld effects (tolerance: delay 1 ms, tau 10 %%, biases 3 std, "
-              "misalignment 0.2 deg):\n");
+  std::printf(
+      "flights reported with an indistinguishable alternative to a selected effect: %d; top-1 misses where the "
+      "withheld effect was reported as indistinguishable from the first: %d\n",
+      confounded_flags, confounded_misses);
+  std::printf(
+      "\nmagnitudes of selected withheld effects (tolerance: delay 1 ms, tau 10 %%, biases 3 std, "
+      "misalignment 0.2 deg):\n");
   for (const auto& [name, w] : magnitude_within)
     std::printf("  %-13s within %d / %d, worst %.3g\n", name.c_str(), w.first, w.second, magnitude_worst[name]);
   std::printf("\nheld-out gap shrink when the withheld effect is added (%%):\n");
@@ -294,8 +293,9 @@ int main(int argc, char** argv) {
                 values.size());
   }
   std::sort(clean_largest_shrink.begin(), clean_largest_shrink.end());
-  std::printf("\nclean flights, largest shrink of any candidate (held-out, or first-order in-sample when not "
-              "refined), sorted (%%):");
+  std::printf(
+      "\nclean flights, largest shrink of any candidate (held-out, or first-order in-sample when not "
+      "refined), sorted (%%):");
   for (double v : clean_largest_shrink) std::printf(" %.3f", v);
   std::printf("\n");
   double total = 0.0, worst = 0.0;
@@ -308,9 +308,10 @@ int main(int argc, char** argv) {
     cpu_total += t;
     cpu_worst = std::max(cpu_worst, t);
   }
-  std::printf("\ndiagnosis time per %.0f s flight (processing included, %d threads): wall mean %.2f s, max %.2f s; "
-              "cpu (all threads) mean %.2f s, max %.2f s\n",
-              seconds, threads, times.empty() ? 0.0 : total / times.size(), worst,
-              cpu_times.empty() ? 0.0 : cpu_total / cpu_times.size(), cpu_worst);
+  std::printf(
+      "\ndiagnosis time per %.0f s flight (processing included, %d threads): wall mean %.2f s, max %.2f s; "
+      "cpu (all threads) mean %.2f s, max %.2f s\n",
+      seconds, threads, times.empty() ? 0.0 : total / times.size(), worst,
+      cpu_times.empty() ? 0.0 : cpu_total / cpu_times.size(), cpu_worst);
   return 0;
 }

@@ -27,11 +27,11 @@ void Report(const char* flight, const char* signal, const IdentificationResult& 
   std::printf(
       "  %-8s %-8s refined delay %6.1f +- %4.1f ms, motor tau %6.1f +- %4.1f ms | "
       "Table III Fz/Mx/My/Mz linear %5.1f/%5.1f/%5.1f/%5.1f %% -> refined %5.1f/%5.1f/%5.1f/%5.1f %%\n",
-      flight, signal, 1e3 * refined.effects.delay_s, 1e3 * refined.effects_std.delay_s,
-      1e3 * refined.effects.motor_tau_s, 1e3 * refined.effects_std.motor_tau_s, pct(linear.relative_error_pct[2]),
-      pct(linear.relative_error_pct[3]), pct(linear.relative_error_pct[4]), pct(linear.relative_error_pct[5]),
-      pct(refined.relative_error_pct[2]), pct(refined.relative_error_pct[3]), pct(refined.relative_error_pct[4]),
-      pct(refined.relative_error_pct[5]));
+      flight, signal, 1e3 * refined.effects.Scalar("delay_s"), 1e3 * refined.effects_std.Scalar("delay_s"),
+      1e3 * refined.effects.Scalar("motor_tau_s"), 1e3 * refined.effects_std.Scalar("motor_tau_s"),
+      pct(linear.relative_error_pct[2]), pct(linear.relative_error_pct[3]), pct(linear.relative_error_pct[4]),
+      pct(linear.relative_error_pct[5]), pct(refined.relative_error_pct[2]), pct(refined.relative_error_pct[3]),
+      pct(refined.relative_error_pct[4]), pct(refined.relative_error_pct[5]));
 }
 
 }  // namespace
@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
         identify.allow_partial = true;
         const IdentificationResult linear = Identify({{vehicle, log, 1.0}}, identify);
         RefineOptions options;
-        options.effects = {EffectKind::kDelay, EffectKind::kMotorLag};
+        options.effects = {ParseEffectKind("delay"), ParseEffectKind("motor_lag")};
         options.num_threads = 2;
         const RefineResult refined = Refine(linear, options);
         Report(flight, signal, linear, refined);

@@ -50,16 +50,16 @@ int DelayStudy(int flights, double seconds, const std::string& config) {
   int within = 0, failed = 0;
   double worst = 0.0;
   for (int flight = 1; flight <= flights; ++flight) {
-    RandomStream random = EffectDrawStream(flight, {EffectKind::kDelay});
+    RandomStream random = EffectDrawStream(flight, {ParseEffectKind("delay")});
     const double total_s = random.Uniform(options.min_s + 0.005, options.max_s - 0.005);
     SimulationOptions sim;
     sim.duration_s = seconds;
     sim.seed = 900 + flight;
-    sim.effects.delay_s = random.Uniform(0.0, 0.04);
+    sim.effects.Set("delay_s", random.Uniform(0.0, 0.04));
     const SimulationResult simulated = Simulate(v.vehicle, v.parameters, sim);
     const double dt = simulated.log.MedianDt();
-    const int shift = static_cast<int>(std::lround((total_s - sim.effects.delay_s) / dt));
-    const double truth_s = sim.effects.delay_s + shift * dt;
+    const int shift = static_cast<int>(std::lround((total_s - sim.effects.Scalar("delay_s")) / dt));
+    const double truth_s = sim.effects.Scalar("delay_s") + shift * dt;
     try {
       IdentifyOptions identify;
       identify.allow_partial = true;
@@ -93,14 +93,14 @@ int main(int argc, char** argv) {
   const double seconds = argc > 2 ? std::atof(argv[2]) : 90.0;
   const std::string config = argc > 3 ? argv[3] : "B";
   const std::vector<Case> cases = {
-      {"delay", {EffectKind::kDelay}},
-      {"motor_lag", {EffectKind::kMotorLag}},
-      {"acc_bias", {EffectKind::kAccBias}},
-      {"gyro_bias", {EffectKind::kGyroBias}},
-      {"misalignment", {EffectKind::kMisalignment}},
-      {"delay+motor_lag", {EffectKind::kDelay, EffectKind::kMotorLag}},
-      {"acc_bias+misalignment", {EffectKind::kAccBias, EffectKind::kMisalignment}},
-      {"delay+acc_bias", {EffectKind::kDelay, EffectKind::kAccBias}},
+      {"delay", {ParseEffectKind("delay")}},
+      {"motor_lag", {ParseEffectKind("motor_lag")}},
+      {"acc_bias", {ParseEffectKind("acc_bias")}},
+      {"gyro_bias", {ParseEffectKind("gyro_bias")}},
+      {"misalignment", {ParseEffectKind("misalignment")}},
+      {"delay+motor_lag", {ParseEffectKind("delay"), ParseEffectKind("motor_lag")}},
+      {"acc_bias+misalignment", {ParseEffectKind("acc_bias"), ParseEffectKind("misalignment")}},
+      {"delay+acc_bias", {ParseEffectKind("delay"), ParseEffectKind("acc_bias")}},
   };
   const SimulationVehicle v = PresetVehicle(config);
   std::printf("%-22s %4s | %-44s | %-44s | %7s %7s %7s | %7s %7s %7s\n", "case", "seed", "effect truth",
@@ -125,9 +125,9 @@ int main(int argc, char** argv) {
         std::string truth, estimate;
         for (EffectKind k : c.kinds) {
           const Eigen::VectorXd t = sim.effects.Get(k), e = refined.effects.Get(k), s = refined.effects_std.Get(k);
-          const double unit = k == EffectKind::kMisalignment
+          const double unit = k == ParseEffectKind("misalignment")
                                   ? 180 / M_PI
-                                  : (k == EffectKind::kDelay || k == EffectKind::kMotorLag ? 1000 : 1);
+                                  : (k == ParseEffectKind("delay") || k == ParseEffectKind("motor_lag") ? 1000 : 1);
           for (int i = 0; i < t.size(); ++i) {
             std::snprintf(buffer, sizeof(buffer), "%.3g ", t[i] * unit);
             truth += buffer;

@@ -51,7 +51,7 @@ const Fixture& GetFixture() {
     f->flights = {{vehicle, f->log_90s, 1.0}};
     f->linear = std::make_unique<IdentificationResult>(Identify(f->flights, f->identify));
     RefineOptions refine;
-    refine.effects = {EffectKind::kDelay};
+    refine.effects = {ParseEffectKind("delay")};
     f->refined = std::make_unique<RefineResult>(Refine(*f->linear, refine));
     options.duration_s = 60.0;
     options.seed = 7;

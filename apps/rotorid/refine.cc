@@ -25,13 +25,15 @@ void PrintSideBySide(const IdentificationResult& linear, const RefineResult& ref
   const TlsSolution& b = refined.refined;
   size_t width = 10;
   for (const std::string& n : linear.system.parameter_names) width = std::max(width, n.size() + 2);
-  std::cout << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(13) << "linear" << std::setw(10)
-            << "std" << std::setw(13) << "refined" << std::setw(10) << "std" << std::setw(10) << "change/std"
+  std::cout << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(13) << "linear"
+            << std::setw(10) << "std" << std::setw(13) << "refined" << std::setw(10) << "std" << std::setw(10)
+            << "change/std"
             << "\n";
   for (int k = 0; k < linear.system.num_parameters(); ++k) {
-    std::cout << std::left << std::setw(static_cast<int>(width)) << linear.system.parameter_names[k] << std::right << std::scientific
-              << std::setprecision(4) << std::setw(13) << a.chi[k] << std::setprecision(1) << std::setw(10) << a.std[k]
-              << std::setprecision(4) << std::setw(13) << b.chi[k] << std::setprecision(1) << std::setw(10) << b.std[k];
+    std::cout << std::left << std::setw(static_cast<int>(width)) << linear.system.parameter_names[k] << std::right
+              << std::scientific << std::setprecision(4) << std::setw(13) << a.chi[k] << std::setprecision(1)
+              << std::setw(10) << a.std[k] << std::setprecision(4) << std::setw(13) << b.chi[k] << std::setprecision(1)
+              << std::setw(10) << b.std[k];
     if (a.essential[k] && a.std[k] > 0)
       std::cout << std::fixed << std::setprecision(2) << std::setw(10) << (b.chi[k] - a.chi[k]) / a.std[k];
     else
@@ -43,7 +45,7 @@ void PrintSideBySide(const IdentificationResult& linear, const RefineResult& ref
 
 void PrintEffects(const RefineResult& refined) {
   std::cout << "effects (value +- std):\n";
-  for (EffectKind kind : kAllEffectKinds) {
+  for (EffectKind kind : AllEffects()) {
     const bool on = std::find(refined.enabled.begin(), refined.enabled.end(), kind) != refined.enabled.end();
     const Eigen::VectorXd v = refined.effects.Get(kind), s = refined.effects_std.Get(kind);
     std::cout << "  " << std::left << std::setw(18) << EffectParameterName(kind) << std::right;
@@ -70,12 +72,14 @@ Command AddRefineCommand(CLI::App& root) {
   auto options = std::make_shared<Options>();
   Command command;
   command.app = root.add_subcommand(
-      "refine", "TLS, then a Ceres refinement of the same parameters jointly with unmodelled effects; linear and "
-                "refined results side by side");
+      "refine",
+      "TLS, then a Ceres refinement of the same parameters jointly with unmodelled effects; linear and "
+      "refined results side by side");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
   AddIdentifyOptions(command.app, &options->identify);
-  command.app->add_option("--effects", options->effects,
-                          "effects to estimate: all, none, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
+  command.app
+      ->add_option("--effects", options->effects,
+                   "effects to estimate: all, none, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
       ->capture_default_str();
   command.app->add_option("--init", options->initial, "initial value of an effect parameter, e.g. delay_s=0.01");
   command.app->add_option("--robust-loss", options->refine.robust_loss, "none, huber or cauchy")->capture_default_str();
@@ -104,14 +108,14 @@ Command AddRefineCommand(CLI::App& root) {
     progress.Finish();
     for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
 
-    nlohmann::json report = {
-        {"rotorid_version", kRotoridVersion},
-        {"command", "refine"},
-        {"settings", {{"observation", ObservationOptionsJson(identify.observation)},
-                      {"tls", TlsOptionsJson(identify.tls)},
-                      {"refine", RefineOptionsJson(refine)}}},
-        {"linear", LinearJson(linear)},
-        {"refined", RefinedJson(linear, refined)}};
+    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                             {"command", "refine"},
+                             {"settings",
+                              {{"observation", ObservationOptionsJson(identify.observation)},
+                               {"tls", TlsOptionsJson(identify.tls)},
+                               {"refine", RefineOptionsJson(refine)}}},
+                             {"linear", LinearJson(linear)},
+                             {"refined", RefinedJson(linear, refined)}};
     std::vector<std::optional<double>> held_out_linear, held_out_refined;
     std::vector<ProcessedFlight> held_out;
     if (!options->flights.validate_log_paths.empty()) {

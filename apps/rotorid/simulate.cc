@@ -98,9 +98,10 @@ Command AddSimulateCommand(CLI::App& root) {
                   "(kt, kd, ms: [3], inertia: [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]), else derived from mass and arm length");
   app->add_option("--seconds", args->options.duration_s, "logged flight length in s (default 90)");
   app->add_option("--seed", args->seed, "random seed, a non-negative integer: same seed, same bytes (default 1)");
+  std::string effect_names;
+  for (EffectKind kind : AllEffects()) effect_names += (effect_names.empty() ? "" : ", ") + kind->parameter_name();
   app->add_option("--effect", args->effects,
-                  "unmodelled effect name=value, vectors name=x,y,z (repeatable): delay_s, motor_tau_s, acc_bias, "
-                  "gyro_bias, misalignment_rad")
+                  "unmodelled effect name=value, vectors name=x,y,z (repeatable): " + effect_names)
       ->allow_extra_args(false);
   app->add_option("--noise", args->noise, "sensor noise preset: none, low or pixhawk (default pixhawk)");
   app->add_option("--rate", args->options.log_rate_hz, "log (and controller) rate in Hz (default 200)");

@@ -23,6 +23,7 @@ FlightLog FlightLog::Slice(int begin, int end) const {
   out.rotor_radps = rotor_radps.middleRows(begin, n);
   if (mocap) out.mocap = MocapTrack{mocap->position_w_m.middleRows(begin, n), mocap->bryant_rad.middleRows(begin, n)};
   if (voltage_v) out.voltage_v = voltage_v->segment(begin, n);
+  if (rotor_command) out.rotor_command = rotor_command->middleRows(begin, n);
   out.gravity_mps2 = gravity_mps2;
   out.metadata = metadata;
   return out;

@@ -15,6 +15,8 @@
 #include "diagnosis/held_out.h"
 #include "diagnosis/linearization.h"
 #include "diagnosis/statistics.h"
+#include "refine/grid_search.h"
+#include "refine/parallel_for.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/refine/refine.h"
@@ -50,30 +52,16 @@ using internal::HeldOutResidual;
 constexpr int kComponents = kNumWrenchComponents;
 
 using EffectMask = unsigned;
-EffectMask Bit(EffectKind kind) { return 1u << static_cast<unsigned>(kind); }
+EffectMask Bit(EffectKind kind) { return 1u << static_cast<unsigned>(kind->index()); }
 bool Has(EffectMask mask, EffectKind kind) { return (mask & Bit(kind)) != 0; }
 std::vector<EffectKind> KindsOf(EffectMask mask) {
   std::vector<EffectKind> kinds;
-  for (EffectKind kind : kAllEffectKinds)
+  for (EffectKind kind : AllEffects())
     if (Has(mask, kind)) kinds.push_back(kind);
   return kinds;
 }
 
-// Runs task(i) for i in [0, count) on up to `threads` threads.
-void ParallelFor(int count, int threads, const std::function<void(int)>& task) {
-  const int workers = std::max(1, std::min(threads, count));
-  if (workers == 1) {
-    for (int i = 0; i < count; ++i) task(i);
-    return;
-  }
-  std::atomic<int> next{0};
-  std::vector<std::thread> pool;
-  for (int w = 0; w < workers; ++w)
-    pool.emplace_back([&]() {
-      for (int i = next++; i < count; i = next++) task(i);
-    });
-  for (std::thread& t : pool) t.join();
-}
+using internal::ParallelFor;
 
 // One model (a set of effects) fitted in every fold, and its held-out residual.
 struct ModelRecord {
@@ -230,24 +218,26 @@ std::string Join(const std::vector<EffectKind>& kinds) {
   return out.empty() ? "none" : out;
 }
 
-// Best in-sample shrink (% of the TLS criterion) of a delay or motor lag candidate over a coarse
-// grid of its value, on top of `base` effects.
+// The values a strongly nonlinear scalar effect is screened over: its descriptor's grid, or for a
+// grid-searched one the search range in steps of 10 ms; empty for the others.
+std::vector<double> ScreeningGrid(EffectKind kind, const DiagnosisOptions& options) {
+  std::vector<double> grid = kind->info().screening_grid;
+  if (kind->info().grid_searched) {
+    const std::vector<double> search =
+        internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, 0.01);
+    grid.insert(grid.end(), search.begin(), search.end());
+  }
+  return grid;
+}
+
+// Best in-sample shrink (% of the TLS criterion) of a strongly nonlinear candidate over its
+// screening grid, on top of `base` effects.
 double GridShrinkPct(const IdentificationResult& full, const Effects& base, EffectKind kind,
                      const DiagnosisOptions& options) {
-  std::vector<double> grid;
-  if (kind == EffectKind::kMotorLag) {
-    grid = {0.01, 0.02, 0.04, 0.08, 0.15, 0.3};
-  } else {
-    for (double d = options.delay_search_min_s; d <= options.delay_search_max_s + 1e-12; d += 0.01) grid.push_back(d);
-  }
+  const std::vector<double> grid = ScreeningGrid(kind, options);
   const double without = EffectCriterion(full, base);
   if (!(without > 0.0)) return 0.0;
-  std::vector<double> criterion(grid.size());
-  ParallelFor(static_cast<int>(grid.size()), options.num_threads, [&](int i) {
-    Effects trial = base;
-    trial.Set(kind, Eigen::VectorXd::Constant(1, grid[i]));
-    criterion[i] = EffectCriterion(full, trial);
-  });
+  const std::vector<double> criterion = internal::CriterionOverGrid(full, base, kind, grid, options.num_threads);
   const double best = std::min(without, *std::min_element(criterion.begin(), criterion.end()));
   return 100.0 * (1.0 - best / without);
 }
@@ -255,48 +245,28 @@ double GridShrinkPct(const IdentificationResult& full, const Effects& base, Effe
 }  // namespace
 
 std::string FormatEffectMagnitude(EffectKind kind, const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) {
-  double unit = 1.0;
-  const char* unit_name = "";
-  switch (kind) {
-    case EffectKind::kDelay:
-    case EffectKind::kMotorLag:
-      unit = 1e3;
-      unit_name = " ms";
-      break;
-    case EffectKind::kAccBias:
-      unit_name = " m/s^2";
-      break;
-    case EffectKind::kGyroBias:
-      unit_name = " rad/s";
-      break;
-    case EffectKind::kMisalignment:
-      unit = 180.0 / M_PI;
-      unit_name = " deg";
-      break;
-  }
-  std::ostringstream out;
-  auto entry = [&](Eigen::Index k) {
-    out << std::setprecision(3) << value[k] * unit;
-    if (k < std_dev.size()) out << " +- " << std::setprecision(2) << std_dev[k] * unit;
-  };
-  if (value.size() == 1) {
-    entry(0);
-  } else {
-    out << "(";
-    for (Eigen::Index k = 0; k < value.size(); ++k) {
-      if (k) out << ", ";
-      entry(k);
-    }
-    out << ")";
-  }
-  out << unit_name;
-  return out.str();
+  return kind->Format(value, std_dev);
 }
 
 Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vector<ProcessedFlight>& held_out,
-                   const DiagnosisOptions& options, const DiagnosisProgress& progress) {
-  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+                   const DiagnosisOptions& requested, const DiagnosisProgress& progress) {
+  if (const std::string problem = requested.Validate(); !problem.empty()) throw Error(problem);
   if (flights.empty()) throw Error("diagnose: no identification flights");
+  // A candidate whose inputs a log lacks (velocity, voltage, ...) is unavailable for these logs.
+  DiagnosisOptions options = requested;
+  options.candidates.clear();
+  std::vector<std::string> unavailable;
+  for (EffectKind kind : requested.candidates) {
+    std::string reason;
+    for (size_t f = 0; f < flights.size() && reason.empty(); ++f)
+      if (const std::string why = kind->Unavailable(flights[f].inputs()); !why.empty())
+        reason = flights[f].source + ": " + why + "; not a candidate";
+    if (reason.empty()) {
+      options.candidates.push_back(kind);
+    } else {
+      unavailable.push_back(reason);
+    }
+  }
   const auto start_time = std::chrono::steady_clock::now();
   Diagnosis diagnosis;
   auto phase_start = start_time;
@@ -310,6 +280,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   // Baseline: the linear model on all identification data.
   const IdentificationResult full = IdentifyProcessed(flights, options.identify);
   diagnosis.warnings = full.warnings;
+  diagnosis.warnings.insert(diagnosis.warnings.end(), unavailable.begin(), unavailable.end());
   diagnosis.linear_parameters = NamedParameters(full.system, full.solution.chi);
   mark("linear identification");
 
@@ -371,16 +342,12 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   auto search_delay = [&]() {
     if (delay_searched) return;
     delay_searched = true;
-    std::vector<double> grid;
-    for (double d = options.delay_search_min_s; d <= options.delay_search_max_s + 1e-12;
-         d += options.delay_search_step_s)
-      grid.push_back(d);
-    std::vector<double> criterion(grid.size());
-    ParallelFor(static_cast<int>(grid.size()), options.num_threads, [&](int i) {
-      Effects trial;
-      trial.delay_s = grid[i];
-      criterion[i] = EffectCriterion(full, trial);
-    });
+    const EffectKind searched =
+        *std::find_if(AllEffects().begin(), AllEffects().end(), [](EffectKind k) { return k->info().grid_searched; });
+    const std::vector<double> grid =
+        internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s);
+    const std::vector<double> criterion =
+        internal::CriterionOverGrid(full, Effects{}, searched, grid, options.num_threads);
     diagnosis.initial_delay_s = grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
     mark("coarse delay search");
   };
@@ -403,9 +370,9 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     Eigen::VectorXd linearized_value;  // one Gauss-Newton step on top of the base model
     Effects linearized_step;           // that step for every effect of the model (base and candidate)
   };
-  std::map<EffectKind, Tested> tested;
+  std::map<EffectKind, Tested, EffectOrder> tested;
   std::vector<std::vector<EffectKind>> step_fitted;  // per step: the candidates refined in the folds
-  std::vector<std::map<EffectKind, EffectTest>> step_tests;
+  std::vector<std::map<EffectKind, EffectTest, EffectOrder>> step_tests;
   std::vector<SelectionStep> forward_steps;  // as selected, before the backward elimination
   EffectMask selected = 0;
   for (int step = 1;; ++step) {
@@ -442,15 +409,17 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       t.linearized_value = point_effects.Get(kind) + columns_of(fit, kind, fit.step);
       t.linearized_step = Effects{};
       for (EffectKind k : KindsOf(selected | Bit(kind))) t.linearized_step.Set(k, columns_of(fit, k, fit.step));
-      if (kind == EffectKind::kMotorLag) t.linearized_value = t.linearized_value.cwiseMax(0.0);  // tau >= 0
-      // tau >= 0: at the bound, a first-order step below it gains nothing.
-      const bool blocked_by_bound =
-          kind == EffectKind::kMotorLag && point_effects.motor_tau_s <= 0.0 && columns_of(fit, kind, fit.step)[0] < 0.0;
+      // A sign-constrained effect (tau >= 0) stays in its range; at the bound, a first-order step
+      // below it gains nothing.
+      const bool sign_constrained = kind->info().lower_bound == 0.0;
+      if (sign_constrained) t.linearized_value = t.linearized_value.cwiseMax(0.0);
+      const bool blocked_by_bound = sign_constrained && (point_effects.Get(kind).array() <= 0.0).all() &&
+                                    (columns_of(fit, kind, fit.step).array() < 0.0).all();
       double predicted = blocked_by_bound ? 0.0 : std::max(0.0, fit.predicted_shrink - base_shrink);
       // Delay and lag act nonlinearly: a 100 ms lag is far from the linearisation point and its
-      // first-order shrink can be a tenth of the real one (PWM-driven Crazyflie flights). Their
-      // screening also takes the best in-sample shrink over a coarse grid of the criterion.
-      if (kind == EffectKind::kDelay || kind == EffectKind::kMotorLag)
+      // first-order shrink can be a tenth of the real one (PWM-driven Crazyflie flights). The
+      // screening of such effects also takes the best in-sample shrink over a coarse grid.
+      if (!ScreeningGrid(kind, options).empty())
         predicted = std::max(predicted, GridShrinkPct(full, point_effects, kind, options));
       t.screening = internal::ScreeningTest(predicted, EffectDimension(kind), fit.effective_samples,
                                             linearization.scored_rows, options.alpha, options.min_shrink_pct);
@@ -471,7 +440,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     std::vector<EffectMask> masks;
     std::vector<std::vector<Effects>> initial;
     for (EffectKind kind : to_fit) {
-      if (kind == EffectKind::kDelay || kind == EffectKind::kMotorLag) search_delay();
+      const bool on_rotor = kind->stage() == EffectStage::kRotorSignal;
+      if (on_rotor) search_delay();
       masks.push_back(selected | Bit(kind));
       std::vector<Effects> starts = base.fold_effects;
       const Effects& step_effects = tested[kind].linearized_step;
@@ -480,12 +450,14 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
         // moves the effects already selected (adding a lag on top of a delay shortens the delay).
         // The rotor-signal effects are nonlinear far from zero: alone, they start where the coarse
         // delay search points instead.
-        const bool rotor_alone = (kind == EffectKind::kDelay && !Has(selected, EffectKind::kMotorLag)) ||
-                                 (kind == EffectKind::kMotorLag && !Has(selected, EffectKind::kDelay));
-        for (EffectKind k : KindsOf(selected | Bit(kind))) start.Set(k, start.Get(k) + step_effects.Get(k));
-        start.motor_tau_s = std::max(start.motor_tau_s, 0.0);
-        if (rotor_alone && kind == EffectKind::kDelay) start.delay_s = diagnosis.initial_delay_s;
-        if (rotor_alone && kind == EffectKind::kMotorLag) start.motor_tau_s = std::max(diagnosis.initial_delay_s, 0.0);
+        bool rotor_alone = on_rotor;
+        for (EffectKind k : KindsOf(selected)) rotor_alone = rotor_alone && k->stage() != EffectStage::kRotorSignal;
+        for (EffectKind k : KindsOf(selected | Bit(kind))) {
+          Eigen::VectorXd value = start.Get(k) + step_effects.Get(k);
+          if (k->info().lower_bound == 0.0) value = value.cwiseMax(0.0);
+          start.Set(k, value);
+        }
+        if (rotor_alone) start.Set(kind, kind->FromEquivalentDelay(diagnosis.initial_delay_s));
       }
       initial.push_back(std::move(starts));
     }

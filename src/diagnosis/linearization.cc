@@ -1,12 +1,14 @@
 #include "diagnosis/linearization.h"
 
+#include <ceres/jet.h>
+
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Eigenvalues>
-
 #include "diagnosis/statistics.h"
+#include "refine/effect_rows.h"
 #include "rotorid/core/error.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/model/parameters.h"
@@ -18,22 +20,6 @@ namespace rotorid::internal {
 namespace {
 
 constexpr int kComponents = kNumWrenchComponents;
-
-// Central-difference steps: small against realistic sizes, large against round-off. Biases enter
-// the rows at most quadratically and the rotor signal piecewise linearly in delay, so central
-// differences are (nearly) exact.
-double DifferenceStep(EffectKind kind) {
-  switch (kind) {
-    case EffectKind::kDelay: return 2e-4;
-    case EffectKind::kMotorLag: return 2e-4;
-    case EffectKind::kAccBias: return 1e-2;
-    case EffectKind::kGyroBias: return 1e-3;
-    case EffectKind::kMisalignment: return 1e-3;
-  }
-  return 1e-4;
-}
-
-bool ActsOnRotorSignal(EffectKind kind) { return kind == EffectKind::kDelay || kind == EffectKind::kMotorLag; }
 
 // Column of W that a named parameter multiplies in this flight, or -1.
 int ColumnOf(const std::string& name, const Vehicle& vehicle) {
@@ -84,11 +70,7 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
   return out;
 }
 
-std::vector<std::string> EffectLabels(EffectKind kind) {
-  const std::string name = EffectParameterName(kind);
-  if (EffectDimension(kind) == 1) return {name};
-  return {name + "_x", name + "_y", name + "_z"};
-}
+std::vector<std::string> EffectLabels(EffectKind kind) { return kind->Labels(EffectDimension(kind)); }
 
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
@@ -112,23 +94,12 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   std::vector<std::vector<Eigen::VectorXd>> component_series(kComponents);
 
   Eigen::Index offset = 0;
+  std::vector<EffectKind> rotor_kinds;
+  for (EffectKind kind : kinds)
+    if (kind->stage() == EffectStage::kRotorSignal) rotor_kinds.push_back(kind);
   for (const ProcessedFlight& flight : flights) {
     const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
-    // The IMU effects do not touch the rotor signal: compute the delayed and lagged rotor entries
-    // once and difference the IMU effects on a copy that carries them (delay and lag then 0).
-    const bool rotor_effects = effects.delay_s != 0.0 || effects.motor_tau_s != 0.0;
-    ProcessedFlight shifted_storage;
-    const ProcessedFlight* imu_flight = &flight;
-    if (rotor_effects) {
-      shifted_storage = flight;
-      shifted_storage.rotor = FilteredRotorSpeed(
-          flight.filter, DelayedLaggedRotorSquared<double>(flight, effects.delay_s, effects.motor_tau_s));
-      imu_flight = &shifted_storage;
-    }
-    Effects imu_effects = effects;
-    imu_effects.delay_s = 0.0;
-    imu_effects.motor_tau_s = 0.0;
-    const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(*imu_flight, imu_effects);
+    const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(flight, effects);
     const Eigen::Index rows = w.rows();
     const Eigen::VectorXd rho = w * chi_t;
     // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
@@ -158,24 +129,21 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
       for (Eigen::Index i = 0; i < rows; ++i)
         out.parameter_jacobian(offset + i, c) = w(i, column) / scale[i % kComponents];
     }
-    Eigen::Index column = 0;
-    for (EffectKind kind : kinds) {
-      const double h = DifferenceStep(kind);
-      for (int a = 0; a < EffectDimension(kind); ++a, ++column) {
-        Eigen::VectorXd w_plus_minus[2];
-        for (int side = 0; side < 2; ++side) {
-          const bool on_rotor = ActsOnRotorSignal(kind);
-          Effects perturbed = on_rotor ? effects : imu_effects;
-          Eigen::VectorXd value = perturbed.Get(kind);
-          value[a] += side == 0 ? h : -h;
-          perturbed.Set(kind, value);
-          w_plus_minus[side] = BuildIdimMatrixWithEffects(on_rotor ? flight : *imu_flight, perturbed) * chi_t;
+    // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows).
+    const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, rotor_kinds);
+    const EffectRows model(&flight, effects, kinds, &rotor);
+    const size_t coordinates = model.coordinates().size();
+    for (int r = 0; r < flight.num_rows_samples(); ++r)
+      for (size_t first = 0; first < coordinates; first += kWideImuJetSize) {
+        const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows = model.Rows<WideImuJet>(r, first);
+        for (int j = 0; j < kComponents; ++j) {
+          WideImuJet rho_jet(0.0);
+          for (int k = 0; k < kNumIdimColumns; ++k) rho_jet += jet_rows(j, k) * chi_t[k];
+          for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c)
+            out.effect_jacobian(offset + kComponents * r + j, static_cast<Eigen::Index>(c)) =
+                rho_jet.v[c - first] / scale[j];
         }
-        const Eigen::VectorXd derivative = (w_plus_minus[0] - w_plus_minus[1]) / (2.0 * h);
-        for (Eigen::Index i = 0; i < rows; ++i)
-          out.effect_jacobian(offset + i, column) = derivative[i] / scale[i % kComponents];
       }
-    }
     for (int j = 0; j < kComponents; ++j) {
       if (std::isinf(scale[j])) continue;
       Eigen::VectorXd series(rows / kComponents);
@@ -230,7 +198,8 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
   fit.correlation = inverse_std.asDiagonal() * effect_cov * inverse_std.asDiagonal();
   fit.effective_samples = static_cast<double>(n) / linearization.autocorrelation_factor;
   // Signatures with chi projected out.
-  const Eigen::MatrixXd projected = effect_columns - chi_columns * (chi_inverse * (chi_columns.transpose() * effect_columns));
+  const Eigen::MatrixXd projected =
+      effect_columns - chi_columns * (chi_inverse * (chi_columns.transpose() * effect_columns));
   fit.residual_correlation.resize(e);
   const double r_norm = r.norm();
   for (Eigen::Index c = 0; c < e; ++c) {

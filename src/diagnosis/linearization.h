@@ -11,11 +11,10 @@
 // columns are ~1e6 times the others), which makes gyro-bias and acc-bias-z std come out orders of
 // magnitude too small. Here the columns are equilibrated first.
 
+#include <Eigen/Core>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rotorid/ident/observation.h"
 #include "rotorid/model/effects.h"
@@ -35,13 +34,13 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
 std::vector<std::string> EffectLabels(EffectKind kind);
 
 struct EffectLinearization {
-  std::vector<EffectKind> kinds;        // effect blocks in column order
-  std::vector<std::string> labels;      // one per effect column
-  std::vector<int> column_kind;         // index into kinds, per effect column
-  Eigen::VectorXd residual;             // scaled rho, all rows of all flights (sample-major, 6 per sample)
-  Eigen::MatrixXd parameter_jacobian;   // scaled d rho / d chi, free parameters
-  Eigen::MatrixXd effect_jacobian;      // scaled d rho / d effect parameters
-  std::vector<int> row_component;       // 0..5 per row
+  std::vector<EffectKind> kinds;       // effect blocks in column order
+  std::vector<std::string> labels;     // one per effect column
+  std::vector<int> column_kind;        // index into kinds, per effect column
+  Eigen::VectorXd residual;            // scaled rho, all rows of all flights (sample-major, 6 per sample)
+  Eigen::MatrixXd parameter_jacobian;  // scaled d rho / d chi, free parameters
+  Eigen::MatrixXd effect_jacobian;     // scaled d rho / d effect parameters
+  std::vector<int> row_component;      // 0..5 per row
   // Rows that carry weight: components the model leaves without rotor term (Mz when kd is
   // discarded; not Fx, Fy) get none, as in the held-out score.
   Eigen::Index scored_rows = 0;
@@ -49,7 +48,8 @@ struct EffectLinearization {
 };
 
 // Linearises the model of `flights` at (parameters, effects): chi columns for `free_parameters`
-// (names as in NamedParameters), effect columns for `kinds` (central differences).
+// (names as in NamedParameters), effect columns for `kinds` (derivatives by the rows' Jets, as in the
+// refinement: src/refine/effect_rows.h).
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
                                      const std::vector<std::string>& free_parameters, const Effects& effects,
@@ -59,8 +59,8 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
 struct EffectSubsetFit {
   std::vector<std::string> labels;
   std::vector<EffectKind> column_kind;
-  Eigen::VectorXd step;                  // Gauss-Newton step of the effect parameters (chi profiled out)
-  Eigen::VectorXd std;                   // sigma * sqrt(autocorrelation factor * (J^T J)^-1)
+  Eigen::VectorXd step;  // Gauss-Newton step of the effect parameters (chi profiled out)
+  Eigen::VectorXd std;   // sigma * sqrt(autocorrelation factor * (J^T J)^-1)
   Eigen::MatrixXd correlation;
   Eigen::VectorXd residual_correlation;  // cosine of the residual with each chi-projected signature
   double predicted_shrink = 0.0;         // fraction of the residual the step removes

@@ -121,6 +121,24 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   out.filter = filter;
   out.rotor_raw = InterpolateLinear(log.t_s, log.rotor_radps, out.t_s);
   out.rotor = FilteredRotorSpeed(filter, out.rotor_raw.array().square().matrix());
+  out.rotor_acceleration = FourthOrderCentralDifference(out.rotor, dt);
+  if (log.rotor_command)
+    out.rotor_command = FiltFiltColumns(filter, InterpolateLinear(log.t_s, *log.rotor_command, out.t_s));
+  if (log.voltage_v)
+    out.voltage_v = FiltFiltColumns(filter, InterpolateLinear(log.t_s, *log.voltage_v, out.t_s)).col(0);
+  if (log.mocap) {
+    Eigen::MatrixXd angles = log.mocap->bryant_rad;
+    for (int a = 0; a < 3; ++a) angles.col(a) = UnwrapAngle(angles.col(a));
+    const Eigen::MatrixXd eta = FiltFiltColumns(filter, InterpolateLinear(log.t_s, angles, out.t_s));
+    const Eigen::MatrixXd position =
+        FiltFiltColumns(filter, InterpolateLinear(log.t_s, log.mocap->position_w_m, out.t_s));
+    const Eigen::MatrixXd velocity_w = FourthOrderCentralDifference(position, dt);
+    out.velocity_mps = Eigen::MatrixX3d(n, 3);
+    for (int i = 0; i < n; ++i)
+      out.velocity_mps->row(i) =
+          (BryantToRotation(eta.row(i).transpose()).transpose() * velocity_w.row(i).transpose()).transpose();
+    out.height_m = position.col(2);
+  }
   if (options.source == DataSource::kImu) {
     const Eigen::MatrixXd gyro = InterpolateLinear(log.t_s, log.gyro_radps, out.t_s);
     const Eigen::MatrixXd acc = InterpolateLinear(log.t_s, log.acc_mps2, out.t_s);
@@ -160,6 +178,16 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   }
   for (int i = trim; i < n - trim; i += step) out.row_samples.push_back(i);
   return out;
+}
+
+FlightInputs ProcessedFlight::inputs() const {
+  FlightInputs available;
+  available.velocity = velocity_mps.has_value();
+  available.height = height_m.has_value();
+  available.voltage = voltage_v.has_value();
+  available.rotor_acceleration = rotor_acceleration.rows() == rotor.rows() && rotor.rows() > 0;
+  available.rotor_command = rotor_command.has_value();
+  return available;
 }
 
 Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight) {

@@ -39,6 +39,7 @@ bool RotorSignalIsCommand(const FlightLog& log) {
 }
 
 void ApplyCommandToSpeed(const CommandToSpeed& map, FlightLog* log) {
+  log->rotor_command = log->rotor_radps;
   log->rotor_radps = log->rotor_radps.unaryExpr([&](double u) { return map(u); });
   const Eigen::Vector3d& c = map.coefficients;
   log->metadata["rotor_signal"] = "speed";

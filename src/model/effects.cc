@@ -1,83 +1,211 @@
 #include "rotorid/model/effects.h"
 
+#include <ceres/jet.h>
+
+#include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <locale>
 #include <sstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/vehicle.h"
 
 namespace rotorid {
+namespace {
 
-const char* EffectName(EffectKind kind) {
-  switch (kind) {
-    case EffectKind::kDelay: return "delay";
-    case EffectKind::kMotorLag: return "motor_lag";
-    case EffectKind::kAccBias: return "acc_bias";
-    case EffectKind::kGyroBias: return "gyro_bias";
-    case EffectKind::kMisalignment: return "misalignment";
+std::string FormatNumber(double value) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << std::setprecision(10) << value;
+  return out.str();
+}
+
+[[noreturn]] void NotOfStage(const EffectDescriptor& effect, const char* hook) {
+  throw Error(std::string("internal: effect '") + effect.name() + "' has no " + hook);
+}
+
+}  // namespace
+
+bool FlightInputs::Has(FlightInput input) const {
+  switch (input) {
+    case FlightInput::kVelocity:
+      return velocity;
+    case FlightInput::kHeight:
+      return height;
+    case FlightInput::kVoltage:
+      return voltage;
+    case FlightInput::kRotorAcceleration:
+      return rotor_acceleration;
+    case FlightInput::kRotorCommand:
+      return rotor_command;
+  }
+  return false;
+}
+
+const char* FlightInputName(FlightInput input) {
+  switch (input) {
+    case FlightInput::kVelocity:
+      return "the velocity (motion capture or velocity columns)";
+    case FlightInput::kHeight:
+      return "the height above ground (motion capture or a height column)";
+    case FlightInput::kVoltage:
+      return "the battery voltage";
+    case FlightInput::kRotorAcceleration:
+      return "the rotor acceleration";
+    case FlightInput::kRotorCommand:
+      return "the raw motor command (a command log with a command-to-speed map)";
   }
   return "?";
 }
 
-const char* EffectParameterName(EffectKind kind) {
-  switch (kind) {
-    case EffectKind::kDelay: return "delay_s";
-    case EffectKind::kMotorLag: return "motor_tau_s";
-    case EffectKind::kAccBias: return "acc_bias";
-    case EffectKind::kGyroBias: return "gyro_bias";
-    case EffectKind::kMisalignment: return "misalignment_rad";
+int EffectDescriptor::Dimension(const Vehicle& /*vehicle*/) const { return info_.dimension; }
+
+std::string EffectDescriptor::Unavailable(const FlightInputs& available) const {
+  std::string missing;
+  for (FlightInput input : info_.inputs)
+    if (!available.Has(input)) missing += (missing.empty() ? "" : " and ") + std::string(FlightInputName(input));
+  return missing.empty() ? std::string() : info_.name + " needs " + missing + ", which this log lacks";
+}
+
+std::vector<std::string> EffectDescriptor::Labels(int dimension) const {
+  if (dimension == 1) return {info_.parameter_name};
+  std::vector<std::string> labels;
+  const char* axes[3] = {"_x", "_y", "_z"};
+  for (int k = 0; k < dimension; ++k)
+    labels.push_back(info_.parameter_name + (dimension == 3 ? std::string(axes[k]) : "_" + std::to_string(k + 1)));
+  return labels;
+}
+
+std::string EffectDescriptor::Format(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const {
+  const double unit = info_.display_scale;
+  std::ostringstream out;
+  auto entry = [&](Eigen::Index k) {
+    out << std::setprecision(3) << value[k] * unit;
+    if (k < std_dev.size()) out << " +- " << std::setprecision(2) << std_dev[k] * unit;
+  };
+  if (value.size() == 1) {
+    entry(0);
+  } else {
+    out << "(";
+    for (Eigen::Index k = 0; k < value.size(); ++k) {
+      if (k) out << ", ";
+      entry(k);
+    }
+    out << ")";
   }
-  return "?";
+  if (!info_.display_unit.empty()) out << " " << info_.display_unit;
+  return out.str();
+}
+
+std::string EffectDescriptor::CheckSimulatable(const Eigen::VectorXd& value) const {
+  const SimulatorLimit& limit = info_.simulator_limit;
+  if (limit.per_coordinate) {
+    for (Eigen::Index k = 0; k < value.size(); ++k)
+      if (!std::isfinite(value[k]) || value[k] < limit.low || value[k] > limit.high)
+        return info_.parameter_name + " must be within [" + FormatNumber(limit.low) + ", " + FormatNumber(limit.high) +
+               "] " + info_.unit + " (got " + FormatNumber(value[k]) + ")";
+    return {};
+  }
+  if (!value.allFinite() || value.norm() > limit.high)
+    return info_.parameter_name + " must be finite with norm <= " + FormatNumber(limit.high) + " " + info_.unit;
+  return {};
+}
+
+Eigen::VectorXd EffectDescriptor::Clamp(const Eigen::VectorXd& value) const {
+  return value.cwiseMax(info_.lower_bound).cwiseMin(info_.upper_bound);
+}
+
+void EffectDescriptor::CorrectImu(const double*, ImuSample<double>*) const { NotOfStage(*this, "IMU model"); }
+void EffectDescriptor::CorrectImu(const ImuJet*, ImuSample<ImuJet>*) const { NotOfStage(*this, "IMU model"); }
+void EffectDescriptor::CorrectImu(const WideImuJet*, ImuSample<WideImuJet>*) const { NotOfStage(*this, "IMU model"); }
+void EffectDescriptor::ApplyToSensor(const double*, ImuSample<double>*) const { NotOfStage(*this, "sensor model"); }
+void EffectDescriptor::TransformRotorSignal(const double*, double, const Eigen::VectorXd&, Eigen::VectorXd*) const {
+  NotOfStage(*this, "rotor-signal model");
+}
+void EffectDescriptor::TransformRotorSignal(const RotorJet*, double, const Eigen::Matrix<RotorJet, -1, 1>&,
+                                            Eigen::Matrix<RotorJet, -1, 1>*) const {
+  NotOfStage(*this, "rotor-signal model");
+}
+Eigen::VectorXd EffectDescriptor::FromEquivalentDelay(double) const { NotOfStage(*this, "equivalent delay"); }
+
+std::vector<EffectKind> EffectsOfStage(EffectStage stage) {
+  std::vector<EffectKind> out;
+  for (EffectKind kind : AllEffects())
+    if (kind->stage() == stage) out.push_back(kind);
+  std::stable_sort(out.begin(), out.end(),
+                   [](EffectKind a, EffectKind b) { return a->info().chain_position < b->info().chain_position; });
+  return out;
+}
+
+std::vector<const double*> EffectChain::Parameters() const {
+  std::vector<const double*> parameters;
+  for (const Eigen::VectorXd& v : values) parameters.push_back(v.data());
+  return parameters;
+}
+
+EffectChain ActingEffects(const Effects& effects, EffectStage stage, const std::vector<EffectKind>& also) {
+  EffectChain chain;
+  for (EffectKind kind : EffectsOfStage(stage))
+    if (!effects.IsZero(kind) || std::find(also.begin(), also.end(), kind) != also.end()) {
+      chain.kinds.push_back(kind);
+      chain.values.push_back(effects.Get(kind));
+    }
+  return chain;
 }
 
 int EffectDimension(EffectKind kind) {
-  return kind == EffectKind::kDelay || kind == EffectKind::kMotorLag ? 1 : 3;
+  const int dimension = kind->FixedDimension();
+  if (dimension < 0) throw Error(std::string("effect '") + kind->name() + "' has one value per rotor");
+  return dimension;
 }
 
 EffectKind ParseEffectKind(const std::string& name) {
-  for (EffectKind kind : kAllEffectKinds)
-    if (name == EffectName(kind) || name == EffectParameterName(kind)) return kind;
+  for (EffectKind kind : AllEffects())
+    if (name == kind->name() || name == kind->parameter_name()) return kind;
   std::string valid;
-  for (EffectKind kind : kAllEffectKinds) valid += std::string(valid.empty() ? "" : ", ") + EffectName(kind);
+  for (EffectKind kind : AllEffects()) valid += (valid.empty() ? "" : ", ") + kind->name();
   throw Error("unknown effect '" + name + "'; known effects: " + valid);
 }
 
 std::vector<EffectKind> ParseEffectList(const std::string& list) {
-  if (list == "all") return {kAllEffectKinds.begin(), kAllEffectKinds.end()};
+  if (list == "all") return AllEffects();
   std::vector<EffectKind> kinds;
   if (list.empty() || list == "none") return kinds;
   std::stringstream stream(list);
   std::string name;
   while (std::getline(stream, name, ',')) {
     const EffectKind kind = ParseEffectKind(name);
-    bool seen = false;
-    for (EffectKind k : kinds) seen = seen || k == kind;
-    if (!seen) kinds.push_back(kind);
+    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) kinds.push_back(kind);
   }
   return kinds;
 }
 
 Eigen::VectorXd Effects::Get(EffectKind kind) const {
-  switch (kind) {
-    case EffectKind::kDelay: return Eigen::VectorXd::Constant(1, delay_s);
-    case EffectKind::kMotorLag: return Eigen::VectorXd::Constant(1, motor_tau_s);
-    case EffectKind::kAccBias: return acc_bias;
-    case EffectKind::kGyroBias: return gyro_bias;
-    case EffectKind::kMisalignment: return misalignment_rad;
-  }
-  return {};
+  const size_t i = static_cast<size_t>(kind->index());
+  if (i < values_.size() && values_[i].size() > 0) return values_[i];
+  return Eigen::VectorXd::Zero(std::max(0, kind->FixedDimension()));
 }
 
 void Effects::Set(EffectKind kind, const Eigen::Ref<const Eigen::VectorXd>& value) {
-  if (value.size() != EffectDimension(kind))
-    throw Error(std::string(EffectParameterName(kind)) + " takes " + std::to_string(EffectDimension(kind)) +
-                " value(s), got " + std::to_string(value.size()));
-  switch (kind) {
-    case EffectKind::kDelay: delay_s = value[0]; break;
-    case EffectKind::kMotorLag: motor_tau_s = value[0]; break;
-    case EffectKind::kAccBias: acc_bias = value; break;
-    case EffectKind::kGyroBias: gyro_bias = value; break;
-    case EffectKind::kMisalignment: misalignment_rad = value; break;
-  }
+  const int dimension = kind->FixedDimension();
+  if (dimension >= 0 && value.size() != dimension)
+    throw Error(kind->parameter_name() + " takes " + std::to_string(dimension) + " value(s), got " +
+                std::to_string(value.size()));
+  const size_t i = static_cast<size_t>(kind->index());
+  if (values_.size() <= i) values_.resize(AllEffects().size());
+  values_[i] = value;
+}
+
+bool Effects::IsZero(EffectKind kind) const {
+  const size_t i = static_cast<size_t>(kind->index());
+  return i >= values_.size() || values_[i].size() == 0 || values_[i].isZero(0.0);
+}
+
+bool Effects::StageIsZero(EffectStage stage) const {
+  for (EffectKind kind : AllEffects())
+    if (kind->stage() == stage && !IsZero(kind)) return false;
+  return true;
 }
 
 void Effects::Assign(const std::string& assignment) {
@@ -99,8 +227,10 @@ void Effects::Assign(const std::string& assignment) {
       throw Error("effect '" + assignment + "': '" + item + "' is not a number");
     values.push_back(v);
   }
-  if (kind == EffectKind::kMotorLag && !values.empty() && values[0] < 0.0)
-    throw Error("motor_tau_s must not be negative");
+  // The sign convention: an effect whose physical range starts at zero takes no negative value.
+  if (kind->info().lower_bound == 0.0)
+    for (double v : values)
+      if (v < 0.0) throw Error(kind->parameter_name() + " must not be negative");
   Set(kind, Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size())));
 }
 

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <thread>
 
+#include "refine/parallel_for.h"
 #include "rotorid/core/error.h"
 
 namespace rotorid {
@@ -16,53 +17,46 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
   if (effects.size() > 8) throw Error("ablation over more than 8 effects (256 refinements) is not supported");
   if (const std::string problem = base.Validate(); !problem.empty()) throw Error(problem);
   const int subsets = 1 << effects.size();
-  // Every subset with a delay would start from the same global delay search: do it once.
+  // Every subset with a grid-searched effect (the delay) would start from the same global search:
+  // do it once.
   RefineOptions shared = base;
-  if (shared.coarse_delay_search && std::find(effects.begin(), effects.end(), EffectKind::kDelay) != effects.end()) {
-    shared.initial.delay_s = CoarseDelaySearch(linear, shared);
+  if (shared.coarse_delay_search) {
+    for (EffectKind kind : effects)
+      if (kind->info().grid_searched) shared.initial.Set(kind, CoarseDelaySearch(linear, base, kind));
     shared.coarse_delay_search = false;
   }
   AblationResult out;
   out.entries.resize(subsets);
-  std::atomic<int> next{0}, done{0};
+  std::atomic<int> done{0};
   std::mutex progress_mutex;
-  std::exception_ptr failure;
-  auto work = [&]() {
-    for (int s = next++; s < subsets; s = next++) {
-      try {
-        AblationEntry& entry = out.entries[s];
-        for (size_t k = 0; k < effects.size(); ++k)
-          if (s & (1 << k)) entry.effects.push_back(effects[k]);
-        RefineOptions options = shared;
-        options.effects = entry.effects;
-        // Subsets without the delay keep it at the caller's initial value, not the search's.
-        if (!options.Enabled(EffectKind::kDelay)) options.initial.delay_s = base.initial.delay_s;
-        options.num_threads = 1;
-        options.compute_covariance = false;
-        entry.result = Refine(linear, options);
-        const auto values = NamedParameters(linear.system, entry.result.refined.chi);
-        entry.relative_error_pct = entry.result.relative_error_pct;
-        if (!held_out.empty())
-          entry.held_out_relative_error_pct = RelativeErrorWithEffects(held_out, values, entry.result.effects);
-        int free = 0;
-        for (bool e : linear.solution.essential) free += e;
-        for (EffectKind k : entry.effects) free += EffectDimension(k);
-        entry.num_parameters = free;
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-      const int finished = ++done;
-      if (on_done) {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        on_done(finished, subsets);
-      }
+  internal::ParallelFor(subsets, num_threads, [&](int s) {
+    {
+      AblationEntry& entry = out.entries[s];
+      for (size_t k = 0; k < effects.size(); ++k)
+        if (s & (1 << k)) entry.effects.push_back(effects[k]);
+      RefineOptions options = shared;
+      options.effects = entry.effects;
+      // Subsets without a searched effect keep it at the caller's initial value, not the search's.
+      for (EffectKind kind : effects)
+        if (!options.Enabled(kind)) options.initial.Set(kind, base.initial.Get(kind));
+      options.num_threads = 1;
+      options.compute_covariance = false;
+      entry.result = Refine(linear, options);
+      const auto values = NamedParameters(linear.system, entry.result.refined.chi);
+      entry.relative_error_pct = entry.result.relative_error_pct;
+      if (!held_out.empty())
+        entry.held_out_relative_error_pct = RelativeErrorWithEffects(held_out, values, entry.result.effects);
+      int free = 0;
+      for (bool e : linear.solution.essential) free += e;
+      for (EffectKind k : entry.effects) free += EffectDimension(k);
+      entry.num_parameters = free;
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::max(1, std::min(num_threads, subsets)); ++t) pool.emplace_back(work);
-  for (std::thread& thread : pool) thread.join();
-  if (failure) std::rethrow_exception(failure);
+    const int finished = ++done;
+    if (on_done) {
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      on_done(finished, subsets);
+    }
+  });
 
   // Information criteria on the whitened residuals, with the sample count divided by the
   // autocorrelation factor of the fit with every candidate effect (the least misspecified one: the

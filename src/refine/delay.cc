@@ -2,11 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
 
+#include "refine/grid_search.h"
 #include "rotorid/core/error.h"
 
 namespace rotorid {
+
+EffectKind DelayEffect() {
+  static const EffectKind kind = ParseEffectKind("delay");
+  return kind;
+}
 
 std::string DelayOptions::Validate() const {
   if (!(max_s > min_s)) return "delay search range is empty (max must exceed min)";
@@ -18,26 +23,13 @@ std::string DelayOptions::Validate() const {
 
 std::vector<double> DelayCriterionCurve(const IdentificationResult& linear, const std::vector<double>& delays_s,
                                         int num_threads) {
-  std::vector<double> criterion(delays_s.size(), 0.0);
-  const int threads = std::max(1, std::min<int>(num_threads, static_cast<int>(delays_s.size())));
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    pool.emplace_back([&, t]() {
-      for (size_t i = t; i < delays_s.size(); i += threads) {
-        Effects effects;
-        effects.delay_s = delays_s[i];
-        criterion[i] = EffectCriterion(linear, effects);
-      }
-    });
-  }
-  for (std::thread& thread : pool) thread.join();
-  return criterion;
+  return internal::CriterionOverGrid(linear, Effects{}, DelayEffect(), delays_s, num_threads);
 }
 
 DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   DelayEstimate out;
-  for (double d = options.min_s; d <= options.max_s + 1e-12; d += options.step_s) out.grid_s.push_back(d);
+  out.grid_s = internal::SearchGrid(options.min_s, options.max_s, options.step_s);
   out.criterion = DelayCriterionCurve(linear, out.grid_s, options.num_threads);
   const size_t best = std::min_element(out.criterion.begin(), out.criterion.end()) - out.criterion.begin();
   out.grid_best_s = out.grid_s[best];
@@ -45,16 +37,17 @@ DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptio
     out.warnings.push_back("the best delay lies at the edge of the searched range [" + std::to_string(options.min_s) +
                            ", " + std::to_string(options.max_s) + "] s; widen it");
   RefineOptions refine;
-  refine.effects = {EffectKind::kDelay};
-  if (options.with_motor_lag) refine.effects.push_back(EffectKind::kMotorLag);
+  const EffectKind lag = ParseEffectKind("motor_lag");
+  refine.effects = {DelayEffect()};
+  if (options.with_motor_lag) refine.effects.push_back(lag);
   refine.coarse_delay_search = false;
-  refine.initial.delay_s = out.grid_best_s;
+  refine.initial.Set(DelayEffect(), out.grid_best_s);
   refine.num_threads = options.num_threads;
   out.refined = Refine(linear, refine);
-  out.delay_s = out.refined.effects.delay_s;
-  out.delay_std_s = out.refined.effects_std.delay_s;
-  out.motor_tau_s = out.refined.effects.motor_tau_s;
-  out.motor_tau_std_s = out.refined.effects_std.motor_tau_s;
+  out.delay_s = out.refined.effects.Scalar(DelayEffect());
+  out.delay_std_s = out.refined.effects_std.Scalar(DelayEffect());
+  out.motor_tau_s = out.refined.effects.Scalar(lag);
+  out.motor_tau_std_s = out.refined.effects_std.Scalar(lag);
   // The refinement must stay in the basin the global search found.
   if (std::abs(out.delay_s - out.grid_best_s) > 3 * options.step_s)
     out.warnings.push_back("the refined delay moved " + std::to_string(1000 * (out.delay_s - out.grid_best_s)) +

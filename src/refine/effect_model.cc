@@ -2,41 +2,90 @@
 
 #include <ceres/jet.h>
 
+#include <algorithm>
+
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/signal/butterworth.h"
 
 namespace rotorid {
+namespace {
 
-EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, double delay_s, double tau_s) {
-  using Jet2 = ceres::Jet<double, 2>;
-  const Eigen::Matrix<Jet2, Eigen::Dynamic, Eigen::Dynamic> squared =
-      DelayedLaggedRotorSquared<Jet2>(flight, Jet2(delay_s, 0), Jet2(tau_s, 1));
-  const Eigen::Index n = squared.rows(), rotors = squared.cols();
-  // The low-pass is linear: filter the value and each derivative separately.
-  Eigen::MatrixXd value(n, rotors), d_delay(n, rotors), d_tau(n, rotors);
-  for (Eigen::Index k = 0; k < n; ++k)
-    for (Eigen::Index r = 0; r < rotors; ++r) {
-      value(k, r) = squared(k, r).a;
-      d_delay(k, r) = squared(k, r).v[0];
-      d_tau(k, r) = squared(k, r).v[1];
+// The rotor-signal chain on every rotor; parameters[j] are those of chain[j].
+template <typename T>
+Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> TransformRotors(const ProcessedFlight& flight,
+                                                                 const std::vector<EffectKind>& chain,
+                                                                 const std::vector<const T*>& parameters) {
+  const Eigen::Index n = flight.rotor_raw.rows(), rotors = flight.rotor_raw.cols();
+  Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> out(n, rotors);
+  Eigen::Matrix<T, Eigen::Dynamic, 1> signal, next;
+  for (Eigen::Index r = 0; r < rotors; ++r) {
+    signal = flight.rotor_raw.col(r).cast<T>();
+    for (size_t j = 0; j < chain.size(); ++j) {
+      chain[j]->TransformRotorSignal(parameters[j], flight.dt_s, signal, &next);
+      signal.swap(next);
     }
-  const Eigen::MatrixXd speed = FilteredRotorSpeed(flight.filter, value);
-  const Eigen::MatrixXd filtered_d_delay = FiltFiltColumns(flight.filter, d_delay);
-  const Eigen::MatrixXd filtered_d_tau = FiltFiltColumns(flight.filter, d_tau);
-  EffectiveRotor out;
+    out.col(r) = signal;
+  }
+  return out;
+}
+
+}  // namespace
+
+Eigen::MatrixXd RotorSignalWithEffects(const ProcessedFlight& flight, const Effects& effects) {
+  const EffectChain chain = ActingEffects(effects, EffectStage::kRotorSignal);
+  return TransformRotors<double>(flight, chain.kinds, chain.Parameters());
+}
+
+EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects& effects,
+                                    const std::vector<EffectKind>& free) {
+  const EffectChain acting = ActingEffects(effects, EffectStage::kRotorSignal, free);
+  const std::vector<EffectKind>& chain = acting.kinds;
+  const std::vector<Eigen::VectorXd>& values = acting.values;
+  // The free coordinates, differentiated kRotorJetSize at a time.
+  struct Coordinate {
+    size_t link;
+    int index;
+  };
+  std::vector<Coordinate> coordinates;
+  for (size_t j = 0; j < chain.size(); ++j)
+    if (std::find(free.begin(), free.end(), chain[j]) != free.end())
+      for (int a = 0; a < values[j].size(); ++a) coordinates.push_back({j, a});
   const int rows = flight.num_rows_samples();
+  const Eigen::Index rotors = flight.rotor_raw.cols(), n = flight.rotor_raw.rows();
+  EffectiveRotor out;
   out.speed.resize(rows, rotors);
-  out.d_delay.resize(rows, rotors);
-  out.d_tau.resize(rows, rotors);
-  for (int r = 0; r < rows; ++r) {
-    const int i = flight.row_samples[r];
-    for (Eigen::Index k = 0; k < rotors; ++k) {
-      const double omega = speed(i, k);
-      // d sqrt(z) = dz / (2 sqrt(z)).
-      const double inv = omega > 0.0 ? 0.5 / omega : 0.0;
-      out.speed(r, k) = omega;
-      out.d_delay(r, k) = filtered_d_delay(i, k) * inv;
-      out.d_tau(r, k) = filtered_d_tau(i, k) * inv;
+  out.derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
+  Eigen::MatrixXd speed;
+  for (size_t first = 0; first == 0 || first < coordinates.size(); first += kRotorJetSize) {
+    std::vector<Eigen::Matrix<RotorJet, Eigen::Dynamic, 1>> jets(chain.size());
+    for (size_t j = 0; j < chain.size(); ++j) jets[j] = values[j].cast<RotorJet>();
+    for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c)
+      jets[coordinates[c].link][coordinates[c].index].v[c - first] = 1.0;
+    std::vector<const RotorJet*> parameters;
+    for (const auto& j : jets) parameters.push_back(j.data());
+    const Eigen::Matrix<RotorJet, Eigen::Dynamic, Eigen::Dynamic> signal =
+        TransformRotors<RotorJet>(flight, chain, parameters);
+    // The low-pass is linear: filter the value and each derivative of y^2 separately.
+    if (first == 0) {
+      Eigen::MatrixXd squared(n, rotors);
+      for (Eigen::Index k = 0; k < n; ++k)
+        for (Eigen::Index r = 0; r < rotors; ++r) squared(k, r) = (signal(k, r) * signal(k, r)).a;
+      speed = FilteredRotorSpeed(flight.filter, squared);
+      for (int r = 0; r < rows; ++r) out.speed.row(r) = speed.row(flight.row_samples[r]);
+    }
+    for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c) {
+      Eigen::MatrixXd d_squared(n, rotors);
+      for (Eigen::Index k = 0; k < n; ++k)
+        for (Eigen::Index r = 0; r < rotors; ++r) d_squared(k, r) = (signal(k, r) * signal(k, r)).v[c - first];
+      const Eigen::MatrixXd filtered = FiltFiltColumns(flight.filter, d_squared);
+      for (int r = 0; r < rows; ++r) {
+        const int i = flight.row_samples[r];
+        for (Eigen::Index k = 0; k < rotors; ++k) {
+          // d sqrt(z) = dz / (2 sqrt(z)).
+          const double omega = speed(i, k);
+          out.derivative[c](r, k) = filtered(i, k) * (omega > 0.0 ? 0.5 / omega : 0.0);
+        }
+      }
     }
   }
   return out;
@@ -44,20 +93,19 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, double delay_
 
 Eigen::MatrixXd BuildIdimMatrixWithEffects(const ProcessedFlight& flight, const Effects& effects) {
   const Eigen::MatrixXd rotor =
-      effects.delay_s == 0.0 && effects.motor_tau_s == 0.0
+      effects.StageIsZero(EffectStage::kRotorSignal)
           ? Eigen::MatrixXd(flight.rotor)
-          : FilteredRotorSpeed(flight.filter,
-                               DelayedLaggedRotorSquared<double>(flight, effects.delay_s, effects.motor_tau_s));
-  const Eigen::Matrix3d imu_from_body = ExpSO3<double>(effects.misalignment_rad);
+          : FilteredRotorSpeed(flight.filter, RotorSignalWithEffects(flight, effects).array().square().matrix());
+  const EffectChain imu = ActingEffects(effects, EffectStage::kImuSensor);
+  const std::vector<const double*> parameters = imu.Parameters();
   const int rows = flight.num_rows_samples();
   Eigen::MatrixXd w(6 * rows, kNumIdimColumns);
   for (int r = 0; r < rows; ++r) {
     const int i = flight.row_samples[r];
-    Eigen::Vector3d omega, omega_dot, s;
-    CorrectImu<double>(imu_from_body, effects.acc_bias, effects.gyro_bias, flight.angular_velocity.row(i).transpose(),
-                       flight.angular_acceleration.row(i).transpose(), flight.specific_force.row(i).transpose(),
-                       &omega, &omega_dot, &s);
-    w.middleRows<6>(6 * r) = IdimRows<double>(omega, omega_dot, s, rotor.row(i).transpose(), flight.vehicle);
+    ImuSample<double> s = LoggedImu<double>(flight, i);
+    CorrectImu<double>(imu.kinds, parameters, &s);
+    w.middleRows<6>(6 * r) = IdimRows<double>(s.angular_velocity, s.angular_acceleration, s.specific_force,
+                                              rotor.row(i).transpose(), flight.vehicle);
   }
   return w;
 }

@@ -1,81 +1,129 @@
 #include "refine/idim_residual.h"
 
+#include <algorithm>
+
+#include "refine/effect_rows.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/model/rigid_body.h"
 
 namespace rotorid::internal {
 
+Effects EffectBlocks::At(double const* const* parameters, const Vehicle& vehicle) const {
+  Effects effects = fixed;
+  for (size_t j = 0; j < free.size(); ++j)
+    effects.Set(free[j], Eigen::Map<const Eigen::VectorXd>(parameters[1 + j], free[j]->Dimension(vehicle)));
+  return effects;
+}
+
+std::shared_ptr<const RotorSignalCache::State> RotorSignalCache::Get(const Effects& effects) const {
+  std::vector<double> key_values;
+  for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal)) {
+    const Eigen::VectorXd v = effects.Get(kind);
+    key_values.insert(key_values.end(), v.data(), v.data() + v.size());
+  }
+  const Eigen::VectorXd key = Eigen::Map<const Eigen::VectorXd>(key_values.data(), key_values.size());
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!state_ || state_->key.size() != key.size() || state_->key != key) {
+    std::vector<EffectKind> free;
+    for (EffectKind kind : blocks_->free)
+      if (kind->stage() == EffectStage::kRotorSignal) free.push_back(kind);
+    auto state = std::make_shared<State>();
+    state->key = key;
+    state->rotor = EffectiveRotorAtRows(*flight_, effects, free);
+    state_ = state;
+  }
+  return state_;
+}
+
+IdimResidualBlock::IdimResidualBlock(const ProcessedFlight* flight, const RotorSignalCache* rotor,
+                                     const CriterionContext* context, const EffectBlocks* blocks, int config, int first,
+                                     int count, Eigen::VectorXd sqrt_weight)
+    : flight_(flight),
+      rotor_(rotor),
+      context_(context),
+      blocks_(blocks),
+      config_(config),
+      first_(first),
+      count_(count),
+      sqrt_weight_(std::move(sqrt_weight)) {
+  set_num_residuals(6 * count);
+  mutable_parameter_block_sizes()->push_back(context->num_parameters);
+  for (EffectKind kind : blocks->free) mutable_parameter_block_sizes()->push_back(kind->Dimension(flight->vehicle));
+}
+
+// What every pass shares: the criterion's scale, chi and the effect-laden rows.
+struct IdimResidualBlock::Point {
+  Eigen::VectorXd n_chi;
+  double d = 0.0, d_sq = 0.0;
+  Eigen::Matrix<double, kNumIdimColumns, 1> flight_chi;
+  std::shared_ptr<const RotorSignalCache::State> rotor;
+  std::unique_ptr<EffectRows> rows;
+};
+
+template <typename T>
+void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate, double* residuals,
+                                     double** jacobians) const {
+  const int p = context_->num_parameters;
+  const int c0 = IdimSystem::ConfigColumn(config_);
+  const std::vector<EffectRows::Coordinate>& coordinates = point.rows->coordinates();
+  size_t last_coordinate = first_coordinate;
+  if constexpr (!std::is_same_v<T, double>)
+    last_coordinate = std::min(coordinates.size(), first_coordinate + T::DIMENSION);
+  for (int s = 0; s < count_; ++s) {
+    const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, first_coordinate);
+    for (int c = 0; c < 6; ++c) {
+      const int out = 6 * s + c;
+      const double scale = sqrt_weight_[out] / point.d;
+      T e(0.0);
+      for (int k = 0; k < kNumIdimColumns; ++k) e += rows(c, k) * point.flight_chi[k];
+      if (first_coordinate == 0) residuals[out] = scale * ScalarPart(e);
+      if (!jacobians) continue;
+      if (first_coordinate == 0 && jacobians[0]) {
+        double* j = jacobians[0] + static_cast<size_t>(out) * p;
+        for (int k = 0; k < p; ++k) j[k] = -residuals[out] * point.n_chi[k] / (context_->total_rows * point.d_sq);
+        j[0] += scale * ScalarPart(rows(c, 0));
+        j[1] += scale * ScalarPart(rows(c, 1));
+        for (int k = 0; k < kNumBodyParameters; ++k) j[c0 + k] += scale * ScalarPart(rows(c, 2 + k));
+        for (int k = 0; k < p; ++k) j[k] *= context_->chi_scale[k];
+      }
+      if constexpr (!std::is_same_v<T, double>)
+        for (size_t k = first_coordinate; k < last_coordinate; ++k) {
+          const EffectRows::Coordinate& coordinate = coordinates[k];
+          double* j = jacobians[1 + coordinate.effect];
+          if (!j) continue;
+          const int size = parameter_block_sizes()[1 + coordinate.effect];
+          j[out * size + coordinate.index] = scale * e.v[k - first_coordinate];
+        }
+    }
+  }
+}
+
 bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const int p = context_->num_parameters;
   Eigen::VectorXd chi_t(p + 1);
   chi_t << Eigen::Map<const Eigen::VectorXd>(parameters[0], p).cwiseProduct(context_->chi_scale), 1.0;
-  const Eigen::VectorXd n_chi = context_->metric * chi_t;
-  const double d_sq = chi_t.dot(n_chi) / context_->total_rows;
-  if (!(d_sq > 0.0)) return false;
-  const double d = std::sqrt(d_sq);
+  Point point;
+  point.n_chi = context_->metric * chi_t;
+  point.d_sq = chi_t.dot(point.n_chi) / context_->total_rows;
+  if (!(point.d_sq > 0.0)) return false;
+  point.d = std::sqrt(point.d_sq);
   const int c0 = IdimSystem::ConfigColumn(config_);
-  Eigen::Matrix<double, kNumIdimColumns, 1> flight_chi;
-  flight_chi << chi_t[0], chi_t[1], chi_t.segment(c0, kNumBodyParameters), 1.0;
-
-  const double delay = parameters[1][0], tau = parameters[2][0];
-  const std::shared_ptr<const RotorSignalCache::State> cached = rotor_->Get(delay, tau);
-  const EffectiveRotor& rotor = cached->rotor;
-  const EffectJet jet_delay(delay, 0), jet_tau(tau, 1);
-  Eigen::Matrix<EffectJet, 3, 1> acc_bias, gyro_bias;
-  for (int a = 0; a < 3; ++a) {
-    acc_bias[a] = EffectJet(parameters[3][a], 2 + a);
-    gyro_bias[a] = EffectJet(parameters[4][a], 5 + a);
-  }
-  const EffectJet qx(parameters[5][0], 8), qy(parameters[5][1], 9), qz(parameters[5][2], 10),
-      qw(parameters[5][3], 11);
-  const EffectJet two_over_norm = EffectJet(2.0) / (qx * qx + qy * qy + qz * qz + qw * qw);
-  Eigen::Matrix<EffectJet, 3, 3> imu_from_body;
-  imu_from_body << EffectJet(1.0) - two_over_norm * (qy * qy + qz * qz), two_over_norm * (qx * qy - qz * qw),
-      two_over_norm * (qx * qz + qy * qw),  //
-      two_over_norm * (qx * qy + qz * qw), EffectJet(1.0) - two_over_norm * (qx * qx + qz * qz),
-      two_over_norm * (qy * qz - qx * qw),  //
-      two_over_norm * (qx * qz - qy * qw), two_over_norm * (qy * qz + qx * qw),
-      EffectJet(1.0) - two_over_norm * (qx * qx + qy * qy);
-
-  const int rotors = flight_->vehicle.num_rotors();
-  Eigen::Matrix<EffectJet, Eigen::Dynamic, 1> omega(rotors);
-  for (int s = 0; s < count_; ++s) {
-    const int row_sample = first_ + s;
-    const int i = flight_->row_samples[row_sample];
-    for (int k = 0; k < rotors; ++k) {
-      omega[k] = EffectJet(rotor.speed(row_sample, k));
-      omega[k] += rotor.d_delay(row_sample, k) * (jet_delay - delay) + rotor.d_tau(row_sample, k) * (jet_tau - tau);
-    }
-    Eigen::Matrix<EffectJet, 3, 1> w, w_dot, sf;
-    CorrectImu<EffectJet>(imu_from_body, acc_bias, gyro_bias, flight_->angular_velocity.row(i).transpose(),
-                          flight_->angular_acceleration.row(i).transpose(),
-                          flight_->specific_force.row(i).transpose(), &w, &w_dot, &sf);
-    const Eigen::Matrix<EffectJet, 6, kNumIdimColumns> rows = IdimRows<EffectJet>(w, w_dot, sf, omega, flight_->vehicle);
-    for (int c = 0; c < 6; ++c) {
-      const int out = 6 * s + c;
-      const double scale = sqrt_weight_[out] / d;
-      EffectJet e(0.0);
-      for (int k = 0; k < kNumIdimColumns; ++k) e += rows(c, k) * flight_chi[k];
-      residuals[out] = scale * e.a;
-      if (!jacobians) continue;
-      if (jacobians[0]) {
-        double* j = jacobians[0] + static_cast<size_t>(out) * p;
-        for (int k = 0; k < p; ++k) j[k] = -residuals[out] * n_chi[k] / (context_->total_rows * d_sq);
-        j[0] += scale * rows(c, 0).a;
-        j[1] += scale * rows(c, 1).a;
-        for (int k = 0; k < kNumBodyParameters; ++k) j[c0 + k] += scale * rows(c, 2 + k).a;
-        for (int k = 0; k < p; ++k) j[k] *= context_->chi_scale[k];
-      }
-      static constexpr int kOffsets[5] = {0, 1, 2, 5, 8};
-      static constexpr int kSizes[5] = {1, 1, 3, 3, 4};
-      for (int b = 0; b < 5; ++b) {
-        if (!jacobians[b + 1]) continue;
-        for (int k = 0; k < kSizes[b]; ++k) jacobians[b + 1][out * kSizes[b] + k] = scale * e.v[kOffsets[b] + k];
-      }
-    }
+  point.flight_chi << chi_t[0], chi_t[1], chi_t.segment(c0, kNumBodyParameters), 1.0;
+  const Effects effects = blocks_->At(parameters, flight_->vehicle);
+  point.rotor = rotor_->Get(effects);
+  point.rows = std::make_unique<EffectRows>(flight_, effects, blocks_->free, &point.rotor->rotor);
+  const size_t coordinates = point.rows->coordinates().size();
+  bool effect_jacobians = false;
+  for (size_t b = 0; jacobians && b < blocks_->free.size(); ++b) effect_jacobians |= jacobians[1 + b] != nullptr;
+  if (!effect_jacobians || coordinates == 0) {
+    EvaluatePass<double>(point, 0, residuals, jacobians);
+  } else if (coordinates <= static_cast<size_t>(kImuJetSize)) {
+    EvaluatePass<ImuJet>(point, 0, residuals, jacobians);
+  } else {
+    for (size_t first = 0; first < coordinates; first += kWideImuJetSize)
+      EvaluatePass<WideImuJet>(point, first, residuals, jacobians);
   }
   return true;
 }
-
 
 }  // namespace rotorid::internal

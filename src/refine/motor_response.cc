@@ -75,8 +75,12 @@ MotorResponse EstimateMotorResponse(const Eigen::VectorXd& t_s, const Eigen::Mat
       std::ceil((options.edge_s + std::max(std::abs(options.min_delay_s), std::abs(options.max_delay_s))) / dt));
   if (m <= 2 * edge + 10) throw Error("motor response: the log is too short for the delays searched");
 
+  const EffectKind delay_effect = ParseEffectKind("delay"), lag_effect = ParseEffectKind("motor_lag");
   auto evaluate = [&](double delay, double tau) {
-    const Eigen::MatrixXd y = DelayedLaggedRotorSquared<double>(commanded, delay, tau).cwiseSqrt();
+    Effects effects;
+    effects.Set(delay_effect, delay);
+    effects.Set(lag_effect, tau);
+    const Eigen::MatrixXd y = RotorSignalWithEffects(commanded, effects).array().square().sqrt().matrix();
     return FitStaticMap(y, measured, edge, m - edge);
   };
   // Coarse grid over the whole range, then finer grids around the best point.

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 
+#include "refine/grid_search.h"
 #include "refine/idim_residual.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/rigid_body.h"
@@ -23,10 +24,10 @@ std::string RefineOptions::Validate() const {
   if (!(delay_search_max_s > delay_search_min_s)) return "delay search range is empty";
   if (!(delay_search_step_s > 0.0)) return "delay search step must be positive";
   if (max_iterations < 1) return "max_iterations must be at least 1";
-  if (initial.motor_tau_s < 0.0) return "initial motor_tau_s must not be negative";
+  for (EffectKind kind : AllEffects())
+    if (kind->info().lower_bound == 0.0 && (initial.Get(kind).array() < 0.0).any())
+      return "initial " + kind->parameter_name() + " must not be negative";
   if (num_threads < 1) return "num_threads must be at least 1";
-  if (!(max_motor_tau_s > 0.0) || !(max_acc_bias_mps2 > 0.0) || !(max_gyro_bias_radps > 0.0))
-    return "effect bounds must be positive";
   return {};
 }
 
@@ -145,17 +146,6 @@ double AutocorrelationFactor(const Eigen::VectorXd& residuals) {
 
 namespace {
 
-// Labels of the tangent coordinates of the effect blocks.
-template <typename Blocks>
-std::vector<std::string> effect_blocks_labels(const Blocks& blocks) {
-  std::vector<std::string> labels;
-  const char* axes[3] = {"_x", "_y", "_z"};
-  for (const auto& b : blocks)
-    for (int k = 0; k < b.tangent; ++k)
-      labels.push_back(std::string(EffectParameterName(b.kind)) + (b.tangent == 3 ? axes[k] : ""));
-  return labels;
-}
-
 // The parameters taking part in the (numerical) null space of the Jacobian, in tangent
 // coordinates with equilibrated columns: what the flights cannot tell apart.
 std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std::vector<const double*>& blocks,
@@ -189,6 +179,13 @@ std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std:
   return names;
 }
 
+// The bounds a refinement keeps an effect in: its physical range, or for a grid-searched effect
+// the search range.
+std::pair<double, double> RefineBounds(EffectKind kind, const RefineOptions& options) {
+  if (kind->info().grid_searched) return {options.delay_search_min_s, options.delay_search_max_s};
+  return {kind->info().lower_bound, kind->info().upper_bound};
+}
+
 // One Ceres pass: the rows of `linear`'s flights with effects, the criterion (lambda, N) of `tls`,
 // started at tls.chi and `start`. Fills chi, effects, their covariance and the solver report.
 RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
@@ -205,13 +202,18 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   context.chi_scale.resize(p);
   for (int k = 0; k < p; ++k) context.chi_scale[k] = std::max({std::abs(tls.chi[k]), tls.std[k], 1e-12});
   Eigen::VectorXd scaled_chi = tls.chi.cwiseQuotient(context.chi_scale);
-  double delay = start.delay_s, tau = start.motor_tau_s;
-  Eigen::Vector3d acc_bias = start.acc_bias, gyro_bias = start.gyro_bias;
-  const double angle = start.misalignment_rad.norm();
-  Eigen::Vector4d misalignment =
-      Eigen::Quaterniond(Eigen::AngleAxisd(angle, angle > 0 ? Eigen::Vector3d(start.misalignment_rad / angle)
-                                                            : Eigen::Vector3d::UnitX()))
-          .coeffs();  // x y z w
+  // One parameter block per enabled effect, in registry order; the others stay at their start.
+  const Vehicle& vehicle = linear.flights.front().vehicle;
+  internal::EffectBlocks effect_blocks;
+  effect_blocks.fixed = start;
+  for (EffectKind kind : AllEffects())
+    if (options.Enabled(kind)) effect_blocks.free.push_back(kind);
+  std::vector<Eigen::VectorXd> effect_values;
+  for (EffectKind kind : effect_blocks.free) {
+    Eigen::VectorXd v = start.Get(kind);
+    if (v.size() == 0) v = Eigen::VectorXd::Zero(kind->Dimension(vehicle));
+    effect_values.push_back(v);
+  }
 
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -219,19 +221,21 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   ceres::Problem problem(problem_options);
   std::vector<std::unique_ptr<RotorSignalCache>> caches;
   const Eigen::VectorXd sqrt_weight = tls.row_weight.cwiseSqrt();
+  std::vector<double*> blocks_of_residual = {scaled_chi.data()};
+  for (Eigen::VectorXd& v : effect_values) blocks_of_residual.push_back(v.data());
   int row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
     const ProcessedFlight& flight = linear.flights[f];
-    caches.push_back(std::make_unique<RotorSignalCache>(&flight));
+    caches.push_back(std::make_unique<RotorSignalCache>(&flight, &effect_blocks));
     for (int first = 0; first < flight.num_rows_samples(); first += kRowSamplesPerBlock) {
       const int count = std::min(kRowSamplesPerBlock, flight.num_rows_samples() - first);
       ceres::LossFunction* loss = nullptr;
       if (options.robust_loss == "huber") loss = new ceres::HuberLoss(options.robust_scale);
       if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
-      problem.AddResidualBlock(new IdimResidualBlock(&flight, caches.back().get(), &context, system.flight_config[f],
-                                                     first, count, sqrt_weight.segment(row + 6 * first, 6 * count)),
-                               loss, scaled_chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(),
-                               misalignment.data());
+      problem.AddResidualBlock(
+          new IdimResidualBlock(&flight, caches.back().get(), &context, &effect_blocks, system.flight_config[f], first,
+                                count, sqrt_weight.segment(row + 6 * first, 6 * count)),
+          loss, blocks_of_residual);
     }
     row += 6 * flight.num_rows_samples();
   }
@@ -243,22 +247,13 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   } else if (!fixed.empty()) {
     problem.SetManifold(scaled_chi.data(), new ceres::SubsetManifold(p, fixed));
   }
-  problem.SetManifold(misalignment.data(), new ceres::EigenQuaternionManifold);
-  problem.SetParameterLowerBound(&tau, 0, 0.0);
-  problem.SetParameterUpperBound(&tau, 0, options.max_motor_tau_s);
-  problem.SetParameterLowerBound(&delay, 0, options.delay_search_min_s);
-  problem.SetParameterUpperBound(&delay, 0, options.delay_search_max_s);
-  for (int a = 0; a < 3; ++a) {
-    problem.SetParameterLowerBound(acc_bias.data(), a, -options.max_acc_bias_mps2);
-    problem.SetParameterUpperBound(acc_bias.data(), a, options.max_acc_bias_mps2);
-    problem.SetParameterLowerBound(gyro_bias.data(), a, -options.max_gyro_bias_radps);
-    problem.SetParameterUpperBound(gyro_bias.data(), a, options.max_gyro_bias_radps);
+  for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
+    const auto [lower, upper] = RefineBounds(effect_blocks.free[b], options);
+    for (Eigen::Index a = 0; a < effect_values[b].size(); ++a) {
+      problem.SetParameterLowerBound(effect_values[b].data(), static_cast<int>(a), lower);
+      problem.SetParameterUpperBound(effect_values[b].data(), static_cast<int>(a), upper);
+    }
   }
-  if (!options.Enabled(EffectKind::kDelay)) problem.SetParameterBlockConstant(&delay);
-  if (!options.Enabled(EffectKind::kMotorLag)) problem.SetParameterBlockConstant(&tau);
-  if (!options.Enabled(EffectKind::kAccBias)) problem.SetParameterBlockConstant(acc_bias.data());
-  if (!options.Enabled(EffectKind::kGyroBias)) problem.SetParameterBlockConstant(gyro_bias.data());
-  if (!options.Enabled(EffectKind::kMisalignment)) problem.SetParameterBlockConstant(misalignment.data());
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_QR;
@@ -281,13 +276,7 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);
 
   const Eigen::VectorXd chi = scaled_chi.cwiseProduct(context.chi_scale);
-  result.effects.delay_s = delay;
-  result.effects.motor_tau_s = tau;
-  result.effects.acc_bias = acc_bias;
-  result.effects.gyro_bias = gyro_bias;
-  const Eigen::AngleAxisd aa(
-      Eigen::Quaterniond(misalignment[3], misalignment[0], misalignment[1], misalignment[2]).normalized());
-  result.effects.misalignment_rad = aa.angle() * aa.axis();
+  result.effects = effect_blocks.At(blocks_of_residual.data(), vehicle);
 
   result.refined = tls;
   result.refined.chi = chi;
@@ -303,21 +292,14 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   result.autocorrelation_factor = AutocorrelationFactor(residuals);
 
   if (options.compute_covariance) {
-    struct Block {
-      const double* ptr;
-      int tangent;
-      EffectKind kind;
-    };
-    std::vector<Block> effect_blocks;
-    if (options.Enabled(EffectKind::kDelay)) effect_blocks.push_back({&delay, 1, EffectKind::kDelay});
-    if (options.Enabled(EffectKind::kMotorLag)) effect_blocks.push_back({&tau, 1, EffectKind::kMotorLag});
-    if (options.Enabled(EffectKind::kAccBias)) effect_blocks.push_back({acc_bias.data(), 3, EffectKind::kAccBias});
-    if (options.Enabled(EffectKind::kGyroBias)) effect_blocks.push_back({gyro_bias.data(), 3, EffectKind::kGyroBias});
-    if (options.Enabled(EffectKind::kMisalignment))
-      effect_blocks.push_back({misalignment.data(), 3, EffectKind::kMisalignment});
+    std::vector<std::string> effect_labels;
+    for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
+      const std::vector<std::string> labels = effect_blocks.free[b]->Labels(static_cast<int>(effect_values[b].size()));
+      effect_labels.insert(effect_labels.end(), labels.begin(), labels.end());
+    }
     std::vector<const double*> blocks;
     if (!free.empty()) blocks.push_back(scaled_chi.data());
-    for (const Block& b : effect_blocks) blocks.push_back(b.ptr);
+    for (const Eigen::VectorXd& v : effect_values) blocks.push_back(v.data());
     std::vector<std::pair<const double*, const double*>> pairs;
     for (size_t a = 0; a < blocks.size(); ++a)
       for (size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
@@ -344,19 +326,17 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
       const int effect_dim = dim - offset;
       const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
       int e = 0;
-      for (const Block& b : effect_blocks) {
-        result.effects_std.Set(b.kind, effect_cov.diagonal().segment(e, b.tangent).cwiseMax(0.0).cwiseSqrt());
-        const char* axes[3] = {"_x", "_y", "_z"};
-        for (int k = 0; k < b.tangent; ++k)
-          result.effect_labels.push_back(std::string(EffectParameterName(b.kind)) + (b.tangent == 3 ? axes[k] : ""));
-        e += b.tangent;
+      for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
+        const Eigen::Index size = effect_values[b].size();
+        result.effects_std.Set(effect_blocks.free[b], effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
+        e += static_cast<int>(size);
       }
+      result.effect_labels = effect_labels;
       const Eigen::VectorXd sd = effect_cov.diagonal().cwiseMax(1e-300).cwiseSqrt();
       result.effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
     } else if (!blocks.empty()) {
       result.rank_deficient = true;
-      result.confounded =
-          NullSpaceParameters(&problem, blocks, linear.system, free, effect_blocks_labels(effect_blocks));
+      result.confounded = NullSpaceParameters(&problem, blocks, linear.system, free, effect_labels);
       std::string names;
       for (const std::string& n : result.confounded) names += (names.empty() ? "" : ", ") + n;
       result.warnings.push_back(
@@ -371,46 +351,42 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   return result;
 }
 
-// Change of an effect parameter between passes below which the passes have settled when no std
-// is computed: a hundredth of the smallest sizes a 90 s flight reveals (refinement study).
-double SettleTolerance(EffectKind kind) {
-  switch (kind) {
-    case EffectKind::kDelay:
-    case EffectKind::kMotorLag:
-      return 1e-5;  // s
-    case EffectKind::kAccBias:
-      return 1e-4;  // m/s^2
-    case EffectKind::kGyroBias:
-      return 1e-4;  // rad/s
-    case EffectKind::kMisalignment:
-      return 1e-5;  // rad
+// Warnings for estimates that ended on a (non-zero) bound of their range: not estimates.
+// The enabled effects whose estimate ended on a non-zero bound of their physical range.
+std::vector<EffectKind> EffectsOnBound(const RefineResult& result, const RefineOptions& options) {
+  std::vector<EffectKind> bounded;
+  for (EffectKind kind : options.effects) {
+    const auto [lower, upper] = RefineBounds(kind, options);
+    const double margin = 1e-9 * (upper - lower);
+    bool on_bound = false;
+    for (double v : result.effects.Get(kind))
+      on_bound = on_bound || (lower != 0.0 && v <= lower + margin) || (upper != 0.0 && v >= upper - margin);
+    if (on_bound) bounded.push_back(kind);
   }
-  return 0.0;
+  return bounded;
 }
 
 }  // namespace
 
-double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options) {
-  Effects trial = options.initial;
-  double best = INFINITY, best_delay = options.initial.delay_s;
-  for (double delay = options.delay_search_min_s; delay <= options.delay_search_max_s + 1e-12;
-       delay += options.delay_search_step_s) {
-    trial.delay_s = delay;
-    const double value = EffectCriterion(linear, trial);
-    if (value < best) {
-      best = value;
-      best_delay = delay;
-    }
-  }
-  return best_delay;
+double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind) {
+  const std::vector<double> grid =
+      internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s);
+  const std::vector<double> criterion =
+      internal::CriterionOverGrid(linear, options.initial, kind, grid, options.num_threads);
+  return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
 }
 
 RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  for (EffectKind kind : options.effects)
+    for (const ProcessedFlight& flight : linear.flights)
+      if (const std::string why = kind->Unavailable(flight.inputs()); !why.empty())
+        throw Error(flight.source + ": " + why);
   Effects start = options.initial;
   const double linear_criterion = EffectCriterion(linear, Effects{});
-  if (options.Enabled(EffectKind::kDelay) && options.coarse_delay_search)
-    start.delay_s = CoarseDelaySearch(linear, options);
+  if (options.coarse_delay_search)
+    for (EffectKind kind : options.effects)
+      if (kind->info().grid_searched) start.Set(kind, CoarseDelaySearch(linear, options, kind));
   RefineResult result = SolveEffects(linear, linear.solution, start, options);
   if (options.reselect_essential && !options.effects.empty()) {
     // The TLS weights and equation-error variances of the linear step were fitted to the residual of
@@ -430,13 +406,14 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       candidate.reselected = reselected;
       result = std::move(candidate);
       // Settled when no effect coordinate moved by more than a tenth of its std (without a
-      // covariance: by more than a size far below anything these equations detect).
+      // covariance: by more than the effect's settle tolerance).
       bool settled = true;
       for (EffectKind kind : options.effects) {
         const Eigen::VectorXd change = (result.effects.Get(kind) - previous.Get(kind)).cwiseAbs();
         const Eigen::VectorXd std_dev = result.effects_std.Get(kind);
         for (Eigen::Index k = 0; k < change.size(); ++k) {
-          const double tolerance = std_dev[k] > 0.0 ? 0.1 * std_dev[k] : SettleTolerance(kind);
+          const double tolerance =
+              k < std_dev.size() && std_dev[k] > 0.0 ? 0.1 * std_dev[k] : kind->info().settle_tolerance;
           settled = settled && change[k] <= tolerance + 1e-12;
         }
       }
@@ -445,24 +422,9 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     }
   }
   // Estimates on a bound are not estimates.
-  auto at_bound = [](double v, double lo, double hi) {
-    return v <= lo + 1e-9 * (hi - lo) || v >= hi - 1e-9 * (hi - lo);
-  };
-  std::vector<EffectKind>& bounded = result.on_bound;
-  bounded.clear();
-  if (options.Enabled(EffectKind::kDelay) &&
-      at_bound(result.effects.delay_s, options.delay_search_min_s, options.delay_search_max_s))
-    bounded.push_back(EffectKind::kDelay);
-  if (options.Enabled(EffectKind::kMotorLag) && result.effects.motor_tau_s >= options.max_motor_tau_s * (1 - 1e-9))
-    bounded.push_back(EffectKind::kMotorLag);
-  if (options.Enabled(EffectKind::kAccBias) &&
-      result.effects.acc_bias.cwiseAbs().maxCoeff() >= options.max_acc_bias_mps2 * (1 - 1e-9))
-    bounded.push_back(EffectKind::kAccBias);
-  if (options.Enabled(EffectKind::kGyroBias) &&
-      result.effects.gyro_bias.cwiseAbs().maxCoeff() >= options.max_gyro_bias_radps * (1 - 1e-9))
-    bounded.push_back(EffectKind::kGyroBias);
-  for (EffectKind kind : bounded)
-    result.warnings.push_back(std::string(EffectParameterName(kind)) +
+  result.on_bound = EffectsOnBound(result, options);
+  for (EffectKind kind : result.on_bound)
+    result.warnings.push_back(kind->parameter_name() +
                               " ended on the bound of its physical range: these flights do not determine it "
                               "(or the residual has a cause outside the modelled effects); do not trust it");
   result.linear_criterion = linear_criterion;

@@ -24,7 +24,7 @@ nlohmann::json RefineOptionsJson(const RefineOptions& options) {
 nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled,
                            const std::vector<EffectKind>& on_bound) {
   nlohmann::json out = nlohmann::json::object();
-  for (EffectKind kind : kAllEffectKinds) {
+  for (EffectKind kind : AllEffects()) {
     const bool on = std::find(enabled.begin(), enabled.end(), kind) != enabled.end();
     const Eigen::VectorXd v = value.Get(kind), s = std_dev.Get(kind);
     nlohmann::json entry;
@@ -41,16 +41,20 @@ nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const s
 }
 
 nlohmann::json SolverJson(const SolverReport& solver) {
-  return {{"iterations", solver.iterations},   {"initial_cost", Number(solver.initial_cost)},
-          {"final_cost", Number(solver.final_cost)}, {"termination", solver.termination},
-          {"message", solver.message},         {"seconds", Number(solver.seconds)}};
+  return {{"iterations", solver.iterations},
+          {"initial_cost", Number(solver.initial_cost)},
+          {"final_cost", Number(solver.final_cost)},
+          {"termination", solver.termination},
+          {"message", solver.message},
+          {"seconds", Number(solver.seconds)}};
 }
 
 nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResult& refined) {
   nlohmann::json correlation = nlohmann::json::array();
   for (Eigen::Index a = 0; a < refined.effect_correlation.rows(); ++a) {
     nlohmann::json row = nlohmann::json::array();
-    for (Eigen::Index b = 0; b < refined.effect_correlation.cols(); ++b) row.push_back(Number(refined.effect_correlation(a, b)));
+    for (Eigen::Index b = 0; b < refined.effect_correlation.cols(); ++b)
+      row.push_back(Number(refined.effect_correlation(a, b)));
     correlation.push_back(row);
   }
   return {{"parameters", ParametersJson(linear.system.parameter_names, refined.refined)},
@@ -67,7 +71,7 @@ Effects EffectsFromReport(const nlohmann::json& report) {
   Effects effects;
   if (!report.contains("refined") || !report["refined"].contains("effects")) return effects;
   const nlohmann::json& block = report["refined"]["effects"];
-  for (EffectKind kind : kAllEffectKinds) {
+  for (EffectKind kind : AllEffects()) {
     const char* name = EffectParameterName(kind);
     if (!block.contains(name) || !block[name].contains("value")) continue;
     const nlohmann::json& v = block[name]["value"];

@@ -7,21 +7,14 @@
 
 namespace rotorid {
 
-namespace {
-
-bool AllEffectsOff(const Effects& e) {
-  return e.delay_s == 0.0 && e.motor_tau_s == 0.0 && e.acc_bias.isZero(0.0) && e.gyro_bias.isZero(0.0) &&
-         e.misalignment_rad.isZero(0.0);
-}
-
-}  // namespace
-
 WrenchSplit ComputeWrenchSplit(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
                                const Effects& effects) {
   const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
   // Without effects the plain rows are the ones the linear identification used.
   const Eigen::MatrixXd w =
-      AllEffectsOff(effects) ? BuildIdimMatrix(flight) : BuildIdimMatrixWithEffects(flight, effects);
+      effects.StageIsZero(EffectStage::kRotorSignal) && effects.StageIsZero(EffectStage::kImuSensor)
+          ? BuildIdimMatrix(flight)
+          : BuildIdimMatrixWithEffects(flight, effects);
   const int rows = flight.num_rows_samples();
   if (w.rows() != 6 * rows || w.cols() != chi_t.size())
     throw Error(flight.source + ": IDIM rows do not match the flight (" + std::to_string(w.rows()) + " rows for " +

@@ -18,10 +18,14 @@ constexpr int kRotorIndex = 13;
 }  // namespace
 
 MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                                       double motor_tau_s)
-    : vehicle_(vehicle), parameters_(parameters), gravity_w_(0.0, 0.0, -gravity_mps2), motor_tau_s_(motor_tau_s) {
+                                       double motor_time_constant_s)
+    : vehicle_(vehicle),
+      parameters_(parameters),
+      gravity_w_(0.0, 0.0, -gravity_mps2),
+      motor_time_constant_s_(motor_time_constant_s) {
   if (!(gravity_mps2 >= 0.0) || !std::isfinite(gravity_mps2)) throw Error("gravity must be a finite number >= 0");
-  if (!(motor_tau_s >= 0.0) || !std::isfinite(motor_tau_s)) throw Error("motor_tau_s must be a finite number >= 0");
+  if (!(motor_time_constant_s >= 0.0) || !std::isfinite(motor_time_constant_s))
+    throw Error("motor_time_constant_s must be a finite number >= 0");
   // The 6x6 spatial inertia must be positive definite, or ForwardDynamics has no unique answer.
   Eigen::Matrix<double, 6, 6> spatial;
   const Eigen::Matrix3d ms_skew = Skew<double>(parameters.body.first_moment);
@@ -36,7 +40,7 @@ MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehiclePara
 Eigen::VectorXd MultirotorDynamics::ActingRotorSpeeds(double t_s, const SimState& state,
                                                       const RotorCommand& command) const {
   if (vehicle_.rotors.empty()) return Eigen::VectorXd();
-  return motor_tau_s_ > 0.0 ? state.rotor_speed_radps : command(t_s);
+  return motor_time_constant_s_ > 0.0 ? state.rotor_speed_radps : command(t_s);
 }
 
 BodyAcceleration MultirotorDynamics::Accelerations(const SimState& state,
@@ -91,8 +95,8 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   const Eigen::Quaterniond q_dot = state.attitude_wb * Eigen::Quaterniond(0.0, w.x(), w.y(), w.z());
   dx.segment<4>(kQuaternionIndex) << 0.5 * q_dot.w(), 0.5 * q_dot.x(), 0.5 * q_dot.y(), 0.5 * q_dot.z();
   dx.segment<3>(kAngularVelocityIndex) = acc.angular_acceleration_b_radps2;
-  if (motor_tau_s_ > 0.0 && !vehicle_.rotors.empty())
-    dx.tail(vehicle_.num_rotors()) = (command(t_s) - state.rotor_speed_radps) / motor_tau_s_;
+  if (motor_time_constant_s_ > 0.0 && !vehicle_.rotors.empty())
+    dx.tail(vehicle_.num_rotors()) = (command(t_s) - state.rotor_speed_radps) / motor_time_constant_s_;
   else
     dx.tail(vehicle_.num_rotors()).setZero();
   return dx;
@@ -107,7 +111,7 @@ SimState MultirotorDynamics::Step(double t_s, const SimState& state, double h_s,
   SimState next = Unpack(x + (h_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4));
   next.attitude_wb.normalize();
   // Without a lag the rotor speed is the command itself; keep the state showing what acts.
-  if (motor_tau_s_ == 0.0 && !vehicle_.rotors.empty()) next.rotor_speed_radps = command(t_s + h_s);
+  if (motor_time_constant_s_ == 0.0 && !vehicle_.rotors.empty()) next.rotor_speed_radps = command(t_s + h_s);
   return next;
 }
 
@@ -119,7 +123,7 @@ SimState IntegrateFreeBody(double mass_kg, const BodyParameters& body, const Sim
   VehicleParameters parameters;
   parameters.mass_kg = mass_kg;
   parameters.body = body;
-  const MultirotorDynamics dynamics(free_body, parameters, /*gravity_mps2=*/0.0, /*motor_tau_s=*/0.0);
+  const MultirotorDynamics dynamics(free_body, parameters, /*gravity_mps2=*/0.0, /*motor_time_constant_s=*/0.0);
   const MultirotorDynamics::RotorCommand no_rotors = [](double) { return Eigen::VectorXd(); };
   const int num_steps = static_cast<int>(std::ceil(duration_s / step_s - 1e-9));
   const double h = num_steps > 0 ? duration_s / num_steps : 0.0;

@@ -112,7 +112,7 @@ PilotReference Pilot::At(double t_s) const {
 }
 
 FlightController::FlightController(const Vehicle& vehicle, const ControllerModel& model, double gravity_mps2,
-                                   double loop_latency_s, double motor_tau_s)
+                                   double loop_latency_s, double motor_time_constant_s)
     : model_(model), gravity_mps2_(gravity_mps2), loop_latency_s_(loop_latency_s) {
   const int n = vehicle.num_rotors();
   allocation_.resize(4, n);
@@ -138,7 +138,7 @@ FlightController::FlightController(const Vehicle& vehicle, const ControllerModel
   // The predictor treats the motor lag as part of the delay, which is only accurate for short
   // lags; slower motors get a softer attitude loop. Yaw is slower: the drag torque gives a quad
   // little yaw authority, and a stiff yaw loop would saturate the rotors.
-  const double attitude_omega = std::clamp(0.5 / std::max(motor_tau_s, 1e-3), 6.25, 10.0);
+  const double attitude_omega = std::clamp(0.5 / std::max(motor_time_constant_s, 1e-3), 6.25, 10.0);
   const Eigen::Vector3d omega(attitude_omega, attitude_omega, 0.4 * attitude_omega);
   attitude_kp_ = omega.cwiseAbs2();
   attitude_kd_ = 2.0 * 0.8 * omega;

@@ -84,11 +84,11 @@ class FlightController {
   // loop_latency_s: time from a measurement to the effect of the command computed from it
   // (one control period, the delay, about one motor time constant). The controller predicts its
   // state that far ahead from the commands still in the pipeline (a Smith predictor), so that
-  // delays and motor lags of tens of ms do not destabilise it; motor_tau_s softens the attitude
+  // delays and motor lags of tens of ms do not destabilise it; motor_time_constant_s softens the attitude
   // loop for slow motors. Throws rotorid::Error when the layout cannot produce independent
   // thrust, roll, pitch and yaw.
   FlightController(const Vehicle& vehicle, const ControllerModel& model, double gravity_mps2, double loop_latency_s,
-                   double motor_tau_s);
+                   double motor_time_constant_s);
 
   // Presets the integrators so that, at rest on the reference, the output is these rotor speeds
   // (the vehicle took off and is trimmed when the simulation starts).

@@ -1,41 +1,43 @@
 #include "rotorid/sim/realistic_effects.h"
 
-#include "rotorid/core/units.h"
+#include "rotorid/core/vehicle.h"
 
 namespace rotorid {
 
-Effects DrawRealisticEffects(const std::vector<EffectKind>& kinds, RandomStream* random,
-                             const RealisticEffectRange& range) {
-  auto signed_size = [&](double low, double high) {
-    const double sign = random->Uniform() < 0.5 ? -1.0 : 1.0;
-    return sign * random->Uniform(low, high);
-  };
+Effects DrawRealisticEffects(const std::vector<EffectKind>& kinds, RandomStream* random, int num_rotors) {
+  Vehicle vehicle;
+  vehicle.rotors.resize(static_cast<size_t>(num_rotors));
   Effects e;
   for (EffectKind kind : kinds) {
-    switch (kind) {
-      case EffectKind::kDelay:
-        e.delay_s = random->Uniform(range.delay_min_s, range.delay_max_s);
+    const DrawRange& range = kind->info().draw;
+    Eigen::VectorXd value(kind->Dimension(vehicle));
+    switch (range.shape) {
+      case DrawShape::kUniform:
+        for (Eigen::Index a = 0; a < value.size(); ++a) value[a] = random->Uniform(range.low, range.high) * range.to_si;
         break;
-      case EffectKind::kMotorLag:
-        e.motor_tau_s = random->Uniform(range.motor_tau_min_s, range.motor_tau_max_s);
+      case DrawShape::kSignedPerAxis:
+        for (Eigen::Index a = 0; a < value.size(); ++a) {
+          const double sign = random->Uniform() < 0.5 ? -1.0 : 1.0;
+          value[a] = sign * random->Uniform(range.low, range.high) * range.to_si;
+        }
         break;
-      case EffectKind::kAccBias:
-        for (int a = 0; a < 3; ++a) e.acc_bias[a] = signed_size(range.acc_bias_min, range.acc_bias_max);
-        break;
-      case EffectKind::kGyroBias:
-        for (int a = 0; a < 3; ++a) e.gyro_bias[a] = signed_size(range.gyro_bias_min, range.gyro_bias_max);
-        break;
-      case EffectKind::kMisalignment: {
+      case DrawShape::kRandomDirection: {
         // A direction uniform on the sphere (normalised Gaussian vector).
-        Eigen::Vector3d axis;
+        // (The 3-d draw keeps its original expression: the evaluation order of the constructor's
+        // arguments is the compiler's, and studies are reproduced from their seeds.)
+        Eigen::VectorXd axis(value.size());
         do {
-          axis = Eigen::Vector3d(random->Normal(), random->Normal(), random->Normal());
+          if (axis.size() == 3) {
+            axis = Eigen::Vector3d(random->Normal(), random->Normal(), random->Normal());
+          } else {
+            for (Eigen::Index a = 0; a < axis.size(); ++a) axis[a] = random->Normal();
+          }
         } while (axis.norm() < 1e-6);
-        const double angle_rad = random->Uniform(range.misalignment_min_deg, range.misalignment_max_deg) * kDegToRad;
-        e.misalignment_rad = axis.normalized() * angle_rad;
+        value = axis.normalized() * (random->Uniform(range.low, range.high) * range.to_si);
         break;
       }
     }
+    e.Set(kind, value);
   }
   return e;
 }
@@ -43,7 +45,7 @@ Effects DrawRealisticEffects(const std::vector<EffectKind>& kinds, RandomStream*
 RandomStream EffectDrawStream(std::uint64_t seed, const std::vector<EffectKind>& kinds) {
   constexpr std::uint64_t kFirstEffectStream = 1000;  // the simulator's streams are below it
   std::uint64_t stream = kFirstEffectStream;
-  for (EffectKind kind : kinds) stream += std::uint64_t{1} << static_cast<int>(kind);
+  for (EffectKind kind : kinds) stream += std::uint64_t{1} << kind->index();
   return RandomStream(seed, stream);
 }
 

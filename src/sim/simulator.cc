@@ -30,11 +30,11 @@ std::string FormatNumber(double value) {
   return out.str();
 }
 
-// The logged rotor signal as the motors see it: Omega_cmd(t) = Omega_log(t - delay_s), the log
-// interpolated linearly between its samples and held before the first (INTERFACE.md, `delay`).
+// The logged rotor signal as the motors see it: Omega_cmd(t) = Omega_log(t - delay), the delay of the rotor-signal
+// effects, the log interpolated linearly between its samples and held before the first (INTERFACE.md, `delay`).
 class DelayedRotorSignal {
  public:
-  explicit DelayedRotorSignal(double delay_s) : delay_s_(delay_s) {}
+  explicit DelayedRotorSignal(double command_latency_s) : command_latency_s_(command_latency_s) {}
 
   void Append(double t_s, const Eigen::VectorXd& omega_radps) {
     times_.push_back(t_s);
@@ -43,7 +43,7 @@ class DelayedRotorSignal {
   const Eigen::VectorXd& Sample(int k) const { return values_[k]; }
 
   Eigen::VectorXd At(double t_s) const {
-    const double t_log = t_s - delay_s_;
+    const double t_log = t_s - command_latency_s_;
     if (t_log <= times_.front()) return values_.front();
     if (t_log >= times_.back()) return values_.back();
     const size_t upper = static_cast<size_t>(std::upper_bound(times_.begin(), times_.end(), t_log) - times_.begin());
@@ -53,7 +53,7 @@ class DelayedRotorSignal {
   }
 
  private:
-  double delay_s_;
+  double command_latency_s_;
   std::vector<double> times_;
   std::vector<Eigen::VectorXd> values_;
 };
@@ -179,16 +179,8 @@ std::string SimulationOptions::Validate() const {
   if (bad(gravity_mps2) || !(gravity_mps2 > 0.0) || gravity_mps2 > 100.0)
     return "gravity must be within (0, 100] m/s^2 (got " + FormatNumber(gravity_mps2) + ")";
   // Beyond these, the simulated controller can no longer fly the pilot's references safely.
-  if (bad(effects.delay_s) || effects.delay_s < 0.0 || effects.delay_s > 0.05)
-    return "delay_s must be within [0, 0.05] s (got " + FormatNumber(effects.delay_s) + ")";
-  if (bad(effects.motor_tau_s) || effects.motor_tau_s < 0.0 || effects.motor_tau_s > 0.08)
-    return "motor_tau_s must be within [0, 0.08] s (got " + FormatNumber(effects.motor_tau_s) + ")";
-  if (!effects.acc_bias.allFinite() || effects.acc_bias.norm() > 5.0)
-    return "acc_bias must be finite with norm <= 5 m/s^2";
-  if (!effects.gyro_bias.allFinite() || effects.gyro_bias.norm() > 0.5)
-    return "gyro_bias must be finite with norm <= 0.5 rad/s";
-  if (!effects.misalignment_rad.allFinite() || effects.misalignment_rad.norm() > 0.3)
-    return "misalignment_rad must be finite with norm <= 0.3 rad";
+  for (EffectKind kind : AllEffects())
+    if (const std::string problem = kind->CheckSimulatable(effects.Get(kind)); !problem.empty()) return problem;
   for (double std : {noise.gyro_std_radps, noise.acc_std_mps2, noise.mocap_position_std_m, noise.mocap_angle_std_rad})
     if (bad(std) || std < 0.0) return "noise standard deviations must be finite and >= 0";
   if (bad(jitter_s) || jitter_s < 0.0 || jitter_s > 0.2 / log_rate_hz)
@@ -230,7 +222,15 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
       !std::isfinite(truth.rotor.kd))
     throw Error("simulated vehicle: kt and kd must be positive");
   const Effects& effects = options.effects;
-  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, effects.motor_tau_s);
+  // The rotor-signal effects as the physics sees them: a delay of the command and a first-order lag.
+  double command_latency_s = 0.0, motor_time_constant_s = 0.0;
+  for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal)) {
+    command_latency_s += kind->SimulatedCommandDelay(effects.Get(kind));
+    motor_time_constant_s += kind->SimulatedMotorTimeConstant(effects.Get(kind));
+  }
+  // The sensor effects in chain order, from the body towards the log.
+  const EffectChain sensor = ActingEffects(effects, EffectStage::kImuSensor);
+  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s);
   const double g = options.gravity_mps2;
 
   // The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
@@ -241,8 +241,8 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   model.kd = truth.rotor.kd * (1.0 + ControllerError(&controller_random, options));
   for (int a = 0; a < 3; ++a)
     model.inertia_diagonal[a] = truth.body.inertia(a, a) * (1.0 + ControllerError(&controller_random, options));
-  const double loop_latency_s = effects.delay_s + effects.motor_tau_s + 1.0 / options.log_rate_hz;
-  internal::FlightController controller(vehicle, model, g, loop_latency_s, effects.motor_tau_s);
+  const double loop_latency_s = command_latency_s + motor_time_constant_s + 1.0 / options.log_rate_hz;
+  internal::FlightController controller(vehicle, model, g, loop_latency_s, motor_time_constant_s);
 
   RandomStream pilot_random(options.seed, kPilotStream);
   internal::PilotOptions pilot_options;
@@ -270,7 +270,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   SimState state;
   state.position_w_m = Eigen::Vector3d(0.0, 0.0, kHoverAltitudeM);
   state.rotor_speed_radps = hover;
-  DelayedRotorSignal rotor_signal(effects.delay_s);
+  DelayedRotorSignal rotor_signal(command_latency_s);
   rotor_signal.Append(times[0], hover);
   controller.Trim(hover, pilot.At(times[0]));
   const MultirotorDynamics::RotorCommand command = [&rotor_signal](double t_s) { return rotor_signal.At(t_s); };
@@ -282,7 +282,6 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
 
   RandomStream imu_random(options.seed, kImuStream);
   RandomStream mocap_random(options.seed, kMocapStream);
-  const Eigen::Matrix3d imu_from_body = ExpSO3<double>(effects.misalignment_rad);
   double previous_yaw = 0.0, previous_noisy_yaw = 0.0;
 
   for (int k = 0; k < num_total; ++k) {
@@ -296,11 +295,12 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
                   FormatNumber(std::acos(std::clamp(r_wb(2, 2), -1.0, 1.0)) * kRadToDeg) +
                   " deg); try a smaller excitation, delay or motor lag");
 
-    // IMU at O_d, INTERFACE.md's order: rotate into the IMU frame, add the bias, add the noise.
-    const Eigen::Vector3d gyro = imu_from_body * state.angular_velocity_b_radps + effects.gyro_bias +
-                                 NoiseVector(&imu_random, options.noise.gyro_std_radps);
-    const Eigen::Vector3d accelerometer = imu_from_body * acc.specific_force_b_mps2 + effects.acc_bias +
-                                          NoiseVector(&imu_random, options.noise.acc_std_mps2);
+    // The IMU: the body's motion at O_b through the sensor effects in chain order (INTERFACE.md's:
+    // rotate into the IMU frame, add the bias), then the noise.
+    ImuSample<double> imu{state.angular_velocity_b_radps, acc.angular_acceleration_b_radps2, acc.specific_force_b_mps2};
+    for (size_t j = 0; j < sensor.kinds.size(); ++j) sensor.kinds[j]->ApplyToSensor(sensor.values[j].data(), &imu);
+    const Eigen::Vector3d gyro = imu.angular_velocity + NoiseVector(&imu_random, options.noise.gyro_std_radps);
+    const Eigen::Vector3d accelerometer = imu.specific_force + NoiseVector(&imu_random, options.noise.acc_std_mps2);
 
     Eigen::Vector3d bryant = RotationToBryant(r_wb);
     bryant.z() = previous_yaw = Unwrap(bryant.z(), previous_yaw);
@@ -340,9 +340,9 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     // RK4 steps of at most 1 / physics_rate, cut where the motors' input has a kink (a logged
     // sample arriving, t_j + delay), so that the piecewise-linear input is smooth within each step.
     std::vector<double> segment_ends;
-    for (auto it = std::upper_bound(times.begin(), times.begin() + k + 2, t - effects.delay_s);
-         it != times.begin() + k + 2 && *it + effects.delay_s < times[k + 1]; ++it)
-      segment_ends.push_back(*it + effects.delay_s);
+    for (auto it = std::upper_bound(times.begin(), times.begin() + k + 2, t - command_latency_s);
+         it != times.begin() + k + 2 && *it + command_latency_s < times[k + 1]; ++it)
+      segment_ends.push_back(*it + command_latency_s);
     segment_ends.push_back(times[k + 1]);
     double segment_start = t;
     for (const double segment_end : segment_ends) {

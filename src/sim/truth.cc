@@ -56,11 +56,6 @@ double Number(const Json& value, const std::string& what, const std::string& sou
   return value.get<double>();
 }
 
-Eigen::Vector3d Vector3(const Json& value, const std::string& what, const std::string& source) {
-  if (!value.is_array() || value.size() != 3) throw Error(source + ": '" + what + "' must be a list of 3 numbers");
-  return {Number(value[0], what, source), Number(value[1], what, source), Number(value[2], what, source)};
-}
-
 }  // namespace
 
 std::string TruthToJson(const SimulationResult& result) {
@@ -69,12 +64,15 @@ std::string TruthToJson(const SimulationResult& result) {
   parameters["kd"] = result.truth.rotor.kd;
   const auto chi = result.truth.body.ToVector();
   for (int j = 0; j < kNumBodyParameters; ++j) parameters[result.vehicle.name + "." + kBodyParameterNames[j]] = chi[j];
-  Json effects;
-  effects["delay_s"] = result.effects.delay_s;
-  effects["motor_tau_s"] = result.effects.motor_tau_s;
-  effects["acc_bias"] = Vector(result.effects.acc_bias);
-  effects["gyro_bias"] = Vector(result.effects.gyro_bias);
-  effects["misalignment_rad"] = Vector(result.effects.misalignment_rad);
+  Json effects = Json::object();
+  for (EffectKind kind : AllEffects()) {
+    const Eigen::VectorXd value = result.effects.Get(kind).size() > 0
+                                      ? result.effects.Get(kind)
+                                      : Eigen::VectorXd::Zero(kind->Dimension(result.vehicle));
+    effects[kind->parameter_name()] = kind->FixedDimension() == 1
+                                          ? Json(value[0])
+                                          : Json(std::vector<double>(value.data(), value.data() + value.size()));
+  }
 
   Json truth;
   truth["vehicle"] = result.vehicle.name;
@@ -115,12 +113,22 @@ SimulationTruth ParseTruthJson(const std::string& text, const std::string& sourc
   }
   truth.parameters.body = BodyParameters::FromVector(chi);
   const Json& effects = Require(root, "effects", "", source);
-  truth.effects.delay_s = Number(Require(effects, "delay_s", "effects", source), "effects.delay_s", source);
-  truth.effects.motor_tau_s = Number(Require(effects, "motor_tau_s", "effects", source), "effects.motor_tau_s", source);
-  truth.effects.acc_bias = Vector3(Require(effects, "acc_bias", "effects", source), "effects.acc_bias", source);
-  truth.effects.gyro_bias = Vector3(Require(effects, "gyro_bias", "effects", source), "effects.gyro_bias", source);
-  truth.effects.misalignment_rad =
-      Vector3(Require(effects, "misalignment_rad", "effects", source), "effects.misalignment_rad", source);
+  if (!effects.is_object()) throw Error(source + ": 'effects' must be an object");
+  // Effects a truth file does not list (written before they existed) are absent.
+  for (EffectKind kind : AllEffects()) {
+    const std::string& name = kind->parameter_name();
+    if (!effects.contains(name)) continue;
+    const Json& value = effects.at(name);
+    const std::string what = "effects." + name;
+    if (kind->FixedDimension() == 1) {
+      truth.effects.Set(kind, Number(value, what, source));
+    } else {
+      if (!value.is_array()) throw Error(source + ": '" + what + "' must be a list of numbers");
+      Eigen::VectorXd v(static_cast<Eigen::Index>(value.size()));
+      for (size_t k = 0; k < value.size(); ++k) v[static_cast<Eigen::Index>(k)] = Number(value[k], what, source);
+      truth.effects.Set(kind, v);
+    }
+  }
   if (root.contains("seed") && root["seed"].is_number_unsigned()) truth.seed = root["seed"].get<std::uint64_t>();
   if (root.contains("noise") && root["noise"].is_object() && root["noise"].contains("preset") &&
       root["noise"]["preset"].is_string())

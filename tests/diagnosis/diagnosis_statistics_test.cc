@@ -1,10 +1,10 @@
 // The diagnosis' statistics (F distribution, autocorrelation factor) and its linearisation of the
 // model in the effect parameters, against independent computations.
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "diagnosis/linearization.h"
 #include "diagnosis/statistics.h"
@@ -56,7 +56,7 @@ TEST(EffectLinearizationTest, FirstOrderStepRecoversAnAccBias) {
   SimulationOptions options;
   options.duration_s = 30.0;
   options.seed = 31;
-  options.effects.acc_bias = Eigen::Vector3d(0.2, -0.3, 0.15);
+  options.effects.Set("acc_bias", Eigen::Vector3d(0.2, -0.3, 0.15));
   const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
   const IdentificationResult linear = Identify({{sim.vehicle, sim.log, 1.0}}, IdentifyOptions{});
   std::vector<std::string> free;
@@ -64,13 +64,13 @@ TEST(EffectLinearizationTest, FirstOrderStepRecoversAnAccBias) {
     if (linear.solution.essential[k]) free.push_back(linear.system.parameter_names[k]);
   const EffectLinearization lin =
       LinearizeEffects(linear.flights, NamedParameters(linear.system, linear.solution.chi), free, Effects{},
-                       {EffectKind::kAccBias, EffectKind::kGyroBias});
+                       {ParseEffectKind("acc_bias"), ParseEffectKind("gyro_bias")});
   ASSERT_EQ(lin.labels.size(), 6u);
   EXPECT_EQ(lin.labels[0], "acc_bias_x");
-  const EffectSubsetFit fit = FitEffectSubset(lin, {EffectKind::kAccBias});
+  const EffectSubsetFit fit = FitEffectSubset(lin, {ParseEffectKind("acc_bias")});
   ASSERT_EQ(fit.step.size(), 3);
   for (int a = 0; a < 3; ++a) {
-    EXPECT_NEAR(fit.step[a], options.effects.acc_bias[a], std::max(3.0 * fit.std[a], 0.01)) << a;
+    EXPECT_NEAR(fit.step[a], options.effects.Get("acc_bias")[a], std::max(3.0 * fit.std[a], 0.01)) << a;
     EXPECT_GT(fit.std[a], 0.0);
   }
   EXPECT_GT(fit.predicted_shrink, 0.1);

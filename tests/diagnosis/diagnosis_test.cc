@@ -38,15 +38,15 @@ const EffectVerdict& VerdictOf(const Diagnosis& d, EffectKind kind) {
 
 TEST(DiagnosisTest, WithheldDelayIsRankedFirstAndItsSizeRecovered) {
   Effects withheld;
-  withheld.delay_s = 0.018;
+  withheld.Set("delay_s", 0.018);
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 21, withheld)}, {}, TestOptions());
   ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
-  EXPECT_EQ(d.selected.front(), EffectKind::kDelay) << DiagnosisVerdict(d);
+  EXPECT_EQ(d.selected.front(), ParseEffectKind("delay")) << DiagnosisVerdict(d);
   const EffectVerdict& first = d.ranking.front();
-  EXPECT_EQ(first.kind, EffectKind::kDelay);
+  EXPECT_EQ(first.kind, ParseEffectKind("delay"));
   EXPECT_TRUE(first.significant);
   EXPECT_EQ(first.status, "selected");
-  EXPECT_NEAR(first.value[0], withheld.delay_s, 1e-3);  // the refinement issue's tolerance
+  EXPECT_NEAR(first.value[0], withheld.Scalar("delay_s"), 1e-3);  // the refinement issue's tolerance
   EXPECT_GT(first.std[0], 0.0);
   EXPECT_GT(first.test.shrink_pct, 10.0);
   // The held-out gap of the rotor-driven components shrinks.
@@ -56,14 +56,14 @@ TEST(DiagnosisTest, WithheldDelayIsRankedFirstAndItsSizeRecovered) {
 
 TEST(DiagnosisTest, WithheldAccBiasIsRankedFirstWithinThreeStd) {
   Effects withheld;
-  withheld.acc_bias = Eigen::Vector3d(0.3, -0.2, 0.25);
+  withheld.Set("acc_bias", Eigen::Vector3d(0.3, -0.2, 0.25));
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 22, withheld)}, {}, TestOptions());
   ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
-  EXPECT_EQ(d.selected.front(), EffectKind::kAccBias) << DiagnosisVerdict(d);
+  EXPECT_EQ(d.selected.front(), ParseEffectKind("acc_bias")) << DiagnosisVerdict(d);
   const EffectVerdict& first = d.ranking.front();
   EXPECT_TRUE(first.significant);
   for (int a = 0; a < 3; ++a) {
-    EXPECT_LE(std::abs(first.value[a] - withheld.acc_bias[a]), 3.0 * first.std[a] + 1e-9)
+    EXPECT_LE(std::abs(first.value[a] - withheld.Get("acc_bias")[a]), 3.0 * first.std[a] + 1e-9)
         << "axis " << a << ": " << first.value[a] << " +- " << first.std[a];
     EXPECT_LT(first.std[a], 0.05);
   }
@@ -73,7 +73,7 @@ TEST(DiagnosisTest, WithheldAccBiasIsRankedFirstWithinThreeStd) {
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 23, Effects{})}, {}, TestOptions());
   EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);
-  ASSERT_EQ(d.ranking.size(), static_cast<size_t>(kNumEffectKinds));
+  ASSERT_EQ(d.ranking.size(), static_cast<size_t>(static_cast<int>(AllEffects().size())));
   for (const EffectVerdict& v : d.ranking) {
     EXPECT_FALSE(v.significant) << EffectName(v.kind);
     EXPECT_EQ(v.status, "not significant") << EffectName(v.kind);
@@ -82,9 +82,9 @@ TEST(DiagnosisTest, CleanFlightFlagsNothing) {
     EXPECT_GT(v.detectable_above.minCoeff(), 0.0) << EffectName(v.kind);
   }
   // A gyro bias of realistic size (<= 0.03 rad/s) is below what these equations reveal on 45 s.
-  EXPECT_GT(VerdictOf(d, EffectKind::kGyroBias).detectable_above.maxCoeff(), 0.03);
+  EXPECT_GT(VerdictOf(d, ParseEffectKind("gyro_bias")).detectable_above.maxCoeff(), 0.03);
   // Delay would show from well below a millisecond.
-  EXPECT_LT(VerdictOf(d, EffectKind::kDelay).detectable_above[0], 1e-3);
+  EXPECT_LT(VerdictOf(d, ParseEffectKind("delay")).detectable_above[0], 1e-3);
   // Held-out equals final; every contract key is there.
   const nlohmann::json j = DiagnosisJson(d);
   for (const char* c : {"Fx", "Fy", "Fz", "Mx", "My", "Mz"}) {
@@ -94,20 +94,20 @@ TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   EXPECT_TRUE(j["baseline"]["relative_error_pct"]["Fx"].is_null());
   EXPECT_TRUE(j["where"]["component"].is_string());
   EXPECT_TRUE(j["selected"].is_array() && j["selected"].empty());
-  EXPECT_EQ(j["ranking"].size(), static_cast<size_t>(kNumEffectKinds));
+  EXPECT_EQ(j["ranking"].size(), static_cast<size_t>(static_cast<int>(AllEffects().size())));
 }
 
 TEST(DiagnosisTest, HeldOutFlightsReplaceFoldsAndFindMisalignment) {
   Effects withheld;
-  withheld.misalignment_rad = Eigen::Vector3d(0.6, -1.5, 0.5) * M_PI / 180.0;
+  withheld.Set("misalignment_rad", Eigen::Vector3d(0.6, -1.5, 0.5) * M_PI / 180.0);
   const Diagnosis d =
       Diagnose({SimulatedFlight(40.0, 24, withheld)}, {SimulatedFlight(40.0, 25, withheld)}, TestOptions());
   EXPECT_NE(d.validation.find("held-out flight"), std::string::npos) << d.validation;
   ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
-  EXPECT_EQ(d.selected.front(), EffectKind::kMisalignment) << DiagnosisVerdict(d);
+  EXPECT_EQ(d.selected.front(), ParseEffectKind("misalignment")) << DiagnosisVerdict(d);
   const EffectVerdict& first = d.ranking.front();
   const Eigen::Matrix3d difference =
-      ExpSO3<double>(first.value).transpose() * ExpSO3<double>(withheld.misalignment_rad);
+      ExpSO3<double>(first.value).transpose() * ExpSO3<double>(withheld.Get("misalignment_rad"));
   const double angle_deg = std::acos(std::clamp(0.5 * (difference.trace() - 1.0), -1.0, 1.0)) * 180.0 / M_PI;
   EXPECT_LT(angle_deg, 0.2);
 }
@@ -117,7 +117,7 @@ TEST(DiagnosisTest, RejectsInvalidOptionsAndForeignHeldOutFlights) {
   options.folds = 1;
   EXPECT_FALSE(options.Validate().empty());
   options = DiagnosisOptions{};
-  options.candidates = {EffectKind::kDelay, EffectKind::kDelay};
+  options.candidates = {ParseEffectKind("delay"), ParseEffectKind("delay")};
   EXPECT_FALSE(options.Validate().empty());
   options = DiagnosisOptions{};
   options.alpha = 0.0;
@@ -127,7 +127,7 @@ TEST(DiagnosisTest, RejectsInvalidOptionsAndForeignHeldOutFlights) {
   ProcessedFlight foreign = flight;
   foreign.vehicle.name = "C";
   DiagnosisOptions fast;
-  fast.candidates = {EffectKind::kAccBias};
+  fast.candidates = {ParseEffectKind("acc_bias")};
   EXPECT_THROW(Diagnose({flight}, {foreign}, fast), Error);
 }
 

@@ -15,10 +15,11 @@ namespace {
 // the acc bias it does not have is charged for its parameters.
 TEST(AblateTest, InformationCriteriaPickTheInjectedEffects) {
   Effects injected;
-  injected.delay_s = 0.015;
-  injected.motor_tau_s = 0.03;
+  injected.Set("delay_s", 0.015);
+  injected.Set("motor_tau_s", 0.03);
   const IdentificationResult linear = testing::IdentifySimulated(testing::SimulatePreset("B", 60.0, 5, injected));
-  const std::vector<EffectKind> candidates = {EffectKind::kDelay, EffectKind::kMotorLag, EffectKind::kAccBias};
+  const std::vector<EffectKind> candidates = {ParseEffectKind("delay"), ParseEffectKind("motor_lag"),
+                                              ParseEffectKind("acc_bias")};
   int progress_calls = 0;
   const AblationResult ablation = Ablate(linear, {}, candidates, RefineOptions{}, 2, [&](int done, int total) {
     EXPECT_LE(done, total);
@@ -42,14 +43,14 @@ TEST(AblateTest, InformationCriteriaPickTheInjectedEffects) {
                             [&](const AblationEntry& a, const AblationEntry& b) { return criterion(a) < criterion(b); })
         ->effects;
   };
-  const std::vector<EffectKind> truth = {EffectKind::kDelay, EffectKind::kMotorLag};
+  const std::vector<EffectKind> truth = {ParseEffectKind("delay"), ParseEffectKind("motor_lag")};
   EXPECT_EQ(best_by([](const AblationEntry& e) { return e.bic; }), truth);
   EXPECT_EQ(best_by([](const AblationEntry& e) { return e.aic; }), truth);
   // The true pair's estimates.
   const AblationEntry& pair = ablation.entries[3];
   ASSERT_EQ(pair.effects, truth);
-  EXPECT_NEAR(pair.result.effects.delay_s, 0.015, 1e-3);
-  EXPECT_NEAR(pair.result.effects.motor_tau_s, 0.03, 3e-3);
+  EXPECT_NEAR(pair.result.effects.Scalar("delay_s"), 0.015, 1e-3);
+  EXPECT_NEAR(pair.result.effects.Scalar("motor_tau_s"), 0.03, 3e-3);
   // Every effect subset fits at least as well as no effect at all (nested models).
   for (const AblationEntry& entry : ablation.entries)
     EXPECT_LE(entry.result.refined_criterion, ablation.entries[0].result.refined_criterion * (1 + 1e-6));
@@ -57,7 +58,7 @@ TEST(AblateTest, InformationCriteriaPickTheInjectedEffects) {
 
 TEST(AblateTest, RefusesTooManyEffects) {
   const IdentificationResult linear = testing::IdentifySimulated(testing::SimulatePreset("B", 10.0, 2));
-  const std::vector<EffectKind> nine(9, EffectKind::kDelay);
+  const std::vector<EffectKind> nine(9, ParseEffectKind("delay"));
   EXPECT_THROW(Ablate(linear, {}, nine, RefineOptions{}, 1), Error);
 }
 

@@ -18,8 +18,8 @@ TEST(MotorResponseTest, RecoversTheSimulatorsDelayAndLag) {
     SimulationOptions options;
     options.duration_s = 20.0;
     options.seed = 11;
-    options.effects.delay_s = delay;
-    options.effects.motor_tau_s = tau;
+    options.effects.Set("delay_s", delay);
+    options.effects.Set("motor_tau_s", tau);
     const SimulationResult sim = Simulate(v.vehicle, v.parameters, options);
     const MotorResponse r = EstimateMotorResponse(sim.log.t_s, sim.log.rotor_radps, sim.states.rotor_speed_radps);
     EXPECT_NEAR(r.delay_s, delay, 0.5e-3);

@@ -22,14 +22,16 @@ IdentificationResult IdentifySimulated(const std::string& preset, double seconds
 }
 
 // Every Jacobian of the residual block agrees with numeric differentiation at a generic point
-// (effects away from zero, parameters off the optimum), the quaternion on its manifold.
+// (effects away from zero, parameters off the optimum), one block per registered effect.
 TEST(IdimResidualBlockTest, PassesGradientChecker) {
   Effects effects;
-  effects.delay_s = 0.012;
-  effects.motor_tau_s = 0.03;
+  effects.Set("delay_s", 0.012);
+  effects.Set("motor_tau_s", 0.03);
   const IdentificationResult linear = IdentifySimulated("B", 8.0, 3, effects);
   const ProcessedFlight& flight = linear.flights[0];
-  internal::RotorSignalCache cache(&flight);
+  internal::EffectBlocks blocks;
+  blocks.free = AllEffects();
+  internal::RotorSignalCache cache(&flight, &blocks);
   internal::CriterionContext context;
   context.metric = linear.solution.column_metric;
   context.total_rows = static_cast<double>(linear.system.w.rows());
@@ -40,18 +42,20 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
     if (context.chi_scale[k] == 0.0) context.chi_scale[k] = 1e-4;  // discarded ones: a generic point too
   const int count = 16;
   const Eigen::VectorXd sqrt_weight = linear.solution.row_weight.segment(6 * 40, 6 * count).cwiseSqrt();
-  internal::IdimResidualBlock block(&flight, &cache, &context, 0, 40, count, sqrt_weight);
+  internal::IdimResidualBlock block(&flight, &cache, &context, &blocks, 0, 40, count, sqrt_weight);
 
   // A generic point: every scaled parameter off the TLS optimum and away from zero.
   Eigen::VectorXd chi = Eigen::VectorXd::LinSpaced(context.num_parameters, 0.9, 1.2);
   chi[0] = 1.0;
-  double delay = 0.0131, tau = 0.0217;
-  Eigen::Vector3d acc_bias(0.12, -0.31, 0.2), gyro_bias(0.01, -0.02, 0.015);
-  Eigen::Vector4d quaternion =
-      Eigen::Quaterniond(Eigen::AngleAxisd(0.04, Eigen::Vector3d(1, -2, 0.5).normalized())).coeffs();
-  std::vector<double*> parameters = {chi.data(), &delay, &tau, acc_bias.data(), gyro_bias.data(), quaternion.data()};
-  ceres::EigenQuaternionManifold quaternion_manifold;
-  std::vector<const ceres::Manifold*> manifolds = {nullptr, nullptr, nullptr, nullptr, nullptr, &quaternion_manifold};
+  // Generic values of every registered effect: a few per cent of its range, coordinates differing.
+  std::vector<Eigen::VectorXd> values;
+  std::vector<double*> parameters = {chi.data()};
+  for (EffectKind kind : blocks.free) {
+    const double size = 0.05 * kind->info().upper_bound;
+    values.push_back(size * Eigen::VectorXd::LinSpaced(kind->Dimension(flight.vehicle), 0.87, 0.31));
+  }
+  for (Eigen::VectorXd& v : values) parameters.push_back(v.data());
+  std::vector<const ceres::Manifold*> manifolds(parameters.size(), nullptr);
   // Ridders' extrapolation (what GradientChecker uses) starts from a step of this fraction of the
   // value; the delay's residuals are smooth only within one sample interval (5 ms), so start well
   // inside it.
@@ -108,22 +112,19 @@ TEST_P(EffectRecoveryTest, RecoversEffectAndUnbiasesParameters) {
   const Effects& e = refined.effects;
   const Effects& s = refined.effects_std;
   for (EffectKind kind : c.kinds) {
-    switch (kind) {
-      case EffectKind::kDelay:
-        EXPECT_NEAR(e.delay_s, c.injected.delay_s, 0.001);
-        break;
-      case EffectKind::kMotorLag:
-        EXPECT_NEAR(e.motor_tau_s, c.injected.motor_tau_s, 0.1 * c.injected.motor_tau_s);
-        break;
-      case EffectKind::kAccBias:
-        for (int a = 0; a < 3; ++a) EXPECT_NEAR(e.acc_bias[a], c.injected.acc_bias[a], 3 * s.acc_bias[a]) << a;
-        break;
-      case EffectKind::kGyroBias:
-        for (int a = 0; a < 3; ++a) EXPECT_NEAR(e.gyro_bias[a], c.injected.gyro_bias[a], 3 * s.gyro_bias[a]) << a;
-        break;
-      case EffectKind::kMisalignment:
-        EXPECT_LT((e.misalignment_rad - c.injected.misalignment_rad).norm(), 0.2 * M_PI / 180);
-        break;
+    const std::string name = kind->name();
+    if (name == "delay") {
+      EXPECT_NEAR(e.Scalar("delay_s"), c.injected.Scalar("delay_s"), 0.001);
+    } else if (name == "motor_lag") {
+      EXPECT_NEAR(e.Scalar("motor_tau_s"), c.injected.Scalar("motor_tau_s"), 0.1 * c.injected.Scalar("motor_tau_s"));
+    } else if (name == "acc_bias") {
+      for (int a = 0; a < 3; ++a)
+        EXPECT_NEAR(e.Get("acc_bias")[a], c.injected.Get("acc_bias")[a], 3 * s.Get("acc_bias")[a]) << a;
+    } else if (name == "gyro_bias") {
+      for (int a = 0; a < 3; ++a)
+        EXPECT_NEAR(e.Get("gyro_bias")[a], c.injected.Get("gyro_bias")[a], 3 * s.Get("gyro_bias")[a]) << a;
+    } else if (name == "misalignment") {
+      EXPECT_LT((e.Get("misalignment_rad") - c.injected.Get("misalignment_rad")).norm(), 0.2 * M_PI / 180);
     }
   }
   // kt, I_xx, I_yy, I_zz of B against the truth.
@@ -146,11 +147,11 @@ TEST_P(EffectRecoveryTest, RecoversEffectAndUnbiasesParameters) {
 
 Effects Make(double delay, double tau, Eigen::Vector3d acc, Eigen::Vector3d gyro, Eigen::Vector3d misalignment_deg) {
   Effects e;
-  e.delay_s = delay;
-  e.motor_tau_s = tau;
-  e.acc_bias = acc;
-  e.gyro_bias = gyro;
-  e.misalignment_rad = misalignment_deg * M_PI / 180;
+  e.Set("delay_s", delay);
+  e.Set("motor_tau_s", tau);
+  e.Set("acc_bias", acc);
+  e.Set("gyro_bias", gyro);
+  e.Set("misalignment_rad", misalignment_deg * M_PI / 180);
   return e;
 }
 
@@ -159,14 +160,14 @@ const Eigen::Vector3d kZero = Eigen::Vector3d::Zero();
 INSTANTIATE_TEST_SUITE_P(
     Effects, EffectRecoveryTest,
     ::testing::Values(
-        RecoveryCase{"delay", Make(0.025, 0, kZero, kZero, kZero), {EffectKind::kDelay}},
-        RecoveryCase{"motor_lag", Make(0, 0.04, kZero, kZero, kZero), {EffectKind::kMotorLag}},
-        RecoveryCase{"acc_bias", Make(0, 0, {0.3, -0.2, 0.4}, kZero, kZero), {EffectKind::kAccBias}},
-        RecoveryCase{"gyro_bias", Make(0, 0, kZero, {0.02, -0.015, 0.01}, kZero), {EffectKind::kGyroBias}},
-        RecoveryCase{"misalignment", Make(0, 0, kZero, kZero, {2.0, -1.5, 1.0}), {EffectKind::kMisalignment}},
+        RecoveryCase{"delay", Make(0.025, 0, kZero, kZero, kZero), {ParseEffectKind("delay")}},
+        RecoveryCase{"motor_lag", Make(0, 0.04, kZero, kZero, kZero), {ParseEffectKind("motor_lag")}},
+        RecoveryCase{"acc_bias", Make(0, 0, {0.3, -0.2, 0.4}, kZero, kZero), {ParseEffectKind("acc_bias")}},
+        RecoveryCase{"gyro_bias", Make(0, 0, kZero, {0.02, -0.015, 0.01}, kZero), {ParseEffectKind("gyro_bias")}},
+        RecoveryCase{"misalignment", Make(0, 0, kZero, kZero, {2.0, -1.5, 1.0}), {ParseEffectKind("misalignment")}},
         RecoveryCase{"delay_and_acc_bias",
                      Make(0.015, 0, {-0.25, 0.3, 0.2}, kZero, kZero),
-                     {EffectKind::kDelay, EffectKind::kAccBias}}),
+                     {ParseEffectKind("delay"), ParseEffectKind("acc_bias")}}),
     [](const auto& test_info) { return test_info.param.name; });
 
 }  // namespace

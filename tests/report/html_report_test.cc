@@ -132,7 +132,7 @@ TEST_F(WrenchSplitTest, WrenchSplitSidesDifferByTheEquationError) {
 
 TEST_F(WrenchSplitTest, RefinedEffectsShrinkTheErrorOfADelayedLog) {
   Effects delay;
-  delay.delay_s = 0.02;
+  delay.Set("delay_s", 0.02);
   const WrenchSplit linear = ComputeWrenchSplit(*held_out_, LinearValues(), Effects());
   const WrenchSplit with_delay = ComputeWrenchSplit(*held_out_, LinearValues(), delay);
   EXPECT_LT(*with_delay.relative_error_pct[3], *linear.relative_error_pct[3]);
@@ -146,7 +146,7 @@ class HtmlReportTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     Effects truth;
-    truth.delay_s = 0.02;
+    truth.Set("delay_s", 0.02);
     SimulationResult train = testing::SimulatePreset("B", 30.0, 31, truth);
     SimulationResult held = testing::SimulatePreset("B", 20.0, 32, truth);
     // Named as logs are: the report finds a stretch's flight by its log.
@@ -155,11 +155,11 @@ class HtmlReportTest : public ::testing::Test {
     linear_ = new IdentificationResult(testing::IdentifySimulated(train));
     held_out_ = new std::vector<ProcessedFlight>(ProcessFlights({{held.vehicle, held.log, 1.0}}, ObservationOptions{}));
     RefineOptions refine;
-    refine.effects = {EffectKind::kDelay};
+    refine.effects = {ParseEffectKind("delay")};
     refined_ = new RefineResult(Refine(*linear_, refine));
     DiagnosisOptions diagnosis;
     diagnosis.identify.allow_partial = true;
-    diagnosis.candidates = {EffectKind::kDelay, EffectKind::kAccBias};
+    diagnosis.candidates = {ParseEffectKind("delay"), ParseEffectKind("acc_bias")};
     diagnosis_ = new Diagnosis(Diagnose(linear_->flights, *held_out_, diagnosis));
     settings_ = new json({{"observation", ObservationOptionsJson(ObservationOptions{})},
                           {"tls", TlsOptionsJson(TlsOptions{})},

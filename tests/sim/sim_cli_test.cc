@@ -62,8 +62,8 @@ TEST(SimCliTest, WritesLogTruthAndVehicle) {
 
   const SimulationTruth truth = ReadTruthJson(dir + "/b.json");
   EXPECT_EQ(truth.vehicle_name, "B");
-  EXPECT_EQ(truth.effects.delay_s, 0.01);
-  EXPECT_EQ(truth.effects.acc_bias, Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_EQ(truth.effects.Scalar("delay_s"), 0.01);
+  EXPECT_EQ(truth.effects.Get("acc_bias"), Eigen::Vector3d(0.1, 0.2, 0.3));
   const std::string json = Slurp(dir + "/b.json");
   for (const char* key : {"\"kt\"", "\"kd\"", "\"B.ms_x\"", "\"B.I_yz\"", "\"motor_tau_s\"", "\"misalignment_rad\"",
                           "\"mass\"", "\"noise\"", "\"seed\""})

@@ -90,8 +90,8 @@ TEST(SimEffectsTest, MotorsGetTheLoggedSignalDelayedAndInterpolated) {
   const SimulationResult flight = Fly(options);
   double worst = 0.0;
   for (int i = 0; i < flight.log.num_samples(); ++i) {
-    if (flight.log.t_s[i] - options.effects.delay_s < flight.log.t_s[0]) continue;  // needs unlogged warm-up
-    const Eigen::VectorXd expected = InterpolateLog(flight.log, flight.log.t_s[i] - options.effects.delay_s);
+    if (flight.log.t_s[i] - options.effects.Scalar("delay_s") < flight.log.t_s[0]) continue;  // needs unlogged warm-up
+    const Eigen::VectorXd expected = InterpolateLog(flight.log, flight.log.t_s[i] - options.effects.Scalar("delay_s"));
     worst = std::max(worst, (flight.states.rotor_speed_radps.row(i).transpose() - expected).norm() / expected.norm());
   }
   EXPECT_LT(worst, 1e-12);
@@ -104,7 +104,7 @@ TEST(SimEffectsTest, MotorLagIsTheFirstOrderResponseToTheDelayedLog) {
   options.effects.Assign("motor_tau_s=0.03");
   const SimulationResult flight = Fly(options);
   const FlightLog& log = flight.log;
-  const double delay = options.effects.delay_s, tau = options.effects.motor_tau_s;
+  const double delay = options.effects.Scalar("delay_s"), tau = options.effects.Scalar("motor_tau_s");
   // Integrate tau x' = u - x exactly for the piecewise-linear u(t) = Omega_log(t - delay), from
   // the first sample whose input is fully logged, through every breakpoint t_j + delay.
   int i = 0;
@@ -136,7 +136,7 @@ TEST(SimEffectsTest, MotorLagIsTheFirstOrderResponseToTheDelayedLog) {
 TEST(SimEffectsTest, AccelerometerBiasShowsInTheHoverMean) {
   SimulationOptions options = Hover("pixhawk");
   const Eigen::Vector3d bias(0.3, -0.2, 0.5);
-  options.effects.acc_bias = bias;
+  options.effects.Set("acc_bias", bias);
   const SimulationResult flight = Fly(options);
   const Eigen::Vector3d mean = flight.log.acc_mps2.colwise().mean();
   const double std_of_mean = 0.15 / std::sqrt(flight.log.num_samples());
@@ -150,7 +150,7 @@ TEST(SimEffectsTest, AccelerometerBiasShowsInTheHoverMean) {
 TEST(SimEffectsTest, GyroBiasShowsInTheHoverMean) {
   SimulationOptions options = Hover("pixhawk");
   const Eigen::Vector3d bias(0.02, -0.01, 0.015);
-  options.effects.gyro_bias = bias;
+  options.effects.Set("gyro_bias", bias);
   const SimulationResult flight = Fly(options);
   const Eigen::Vector3d mean = flight.log.gyro_radps.colwise().mean();
   EXPECT_LT((mean - bias).norm(), 0.001 + 6.0 * 0.01 / std::sqrt(flight.log.num_samples()));
@@ -160,7 +160,7 @@ TEST(SimEffectsTest, GyroBiasShowsInTheHoverMean) {
 TEST(SimEffectsTest, MisalignmentRotatesTheHoverSpecificForceByItsAngle) {
   SimulationOptions options = Hover("none");
   const Eigen::Vector3d r(0.02, -0.03, 0.0);  // perpendicular to the hover specific force
-  options.effects.misalignment_rad = r;
+  options.effects.Set("misalignment_rad", r);
   const SimulationResult flight = Fly(options);
   const Eigen::Vector3d measured = flight.log.acc_mps2.colwise().mean();
   const Eigen::Vector3d true_force = flight.states.specific_force_b_mps2.colwise().mean();
@@ -191,12 +191,12 @@ TEST(SimEffectsTest, SensorModelAppliesRotationThenBiasThenNoise) {
   options.effects.Assign("acc_bias=0.2,0.1,-0.3");
   options.effects.Assign("gyro_bias=0.01,-0.02,0.03");
   const SimulationResult flight = Fly(options, "B");
-  const Eigen::Matrix3d imu_from_body = ExpSO3<double>(options.effects.misalignment_rad);
+  const Eigen::Matrix3d imu_from_body = ExpSO3<double>(options.effects.Get("misalignment_rad"));
   for (int i = 0; i < flight.log.num_samples(); i += 7) {
     const Eigen::Vector3d acc =
-        imu_from_body * flight.states.specific_force_b_mps2.row(i).transpose() + options.effects.acc_bias;
+        imu_from_body * flight.states.specific_force_b_mps2.row(i).transpose() + options.effects.Get("acc_bias");
     const Eigen::Vector3d gyro =
-        imu_from_body * flight.states.angular_velocity_b_radps.row(i).transpose() + options.effects.gyro_bias;
+        imu_from_body * flight.states.angular_velocity_b_radps.row(i).transpose() + options.effects.Get("gyro_bias");
     ASSERT_LT((flight.log.acc_mps2.row(i).transpose() - acc).norm(), 1e-12);
     ASSERT_LT((flight.log.gyro_radps.row(i).transpose() - gyro).norm(), 1e-12);
   }

@@ -246,8 +246,8 @@ TEST(SimTruthTest, TruthJsonRoundTrips) {
   EXPECT_DOUBLE_EQ(truth.parameters.mass_kg, 1.452);
   EXPECT_EQ(truth.parameters.body.ToVector(), flight.truth.body.ToVector());
   EXPECT_EQ(truth.parameters.rotor.kt, flight.truth.rotor.kt);
-  EXPECT_EQ(truth.effects.motor_tau_s, 0.02);
-  EXPECT_EQ(truth.effects.gyro_bias, options.effects.gyro_bias);
+  EXPECT_EQ(truth.effects.Scalar("motor_tau_s"), 0.02);
+  EXPECT_EQ(truth.effects.Get("gyro_bias"), options.effects.Get("gyro_bias"));
   EXPECT_THROW(ParseTruthJson("{\"vehicle\": \"B\"}", "t.json"), Error);
 }
 
@@ -261,8 +261,9 @@ TEST(SimOptionsTest, ValidateNamesTheViolatedConstraint) {
   EXPECT_NE(problem([](SimulationOptions& o) { o.duration_s = -1; }).find("duration"), std::string::npos);
   EXPECT_NE(problem([](SimulationOptions& o) { o.log_rate_hz = 10; }).find("rate"), std::string::npos);
   EXPECT_NE(problem([](SimulationOptions& o) { o.physics_rate_hz = 500; }).find("physics"), std::string::npos);
-  EXPECT_NE(problem([](SimulationOptions& o) { o.effects.delay_s = 0.5; }).find("delay_s"), std::string::npos);
-  EXPECT_NE(problem([](SimulationOptions& o) { o.effects.motor_tau_s = -0.1; }).find("motor_tau_s"), std::string::npos);
+  EXPECT_NE(problem([](SimulationOptions& o) { o.effects.Set("delay_s", 0.5); }).find("delay_s"), std::string::npos);
+  EXPECT_NE(problem([](SimulationOptions& o) { o.effects.Set("motor_tau_s", -0.1); }).find("motor_tau_s"),
+            std::string::npos);
   EXPECT_NE(problem([](SimulationOptions& o) { o.jitter_s = 0.01; }).find("jitter"), std::string::npos);
   EXPECT_NE(problem([](SimulationOptions& o) { o.noise.acc_std_mps2 = -1; }).find("noise"), std::string::npos);
   EXPECT_THROW(NoiseLevels::Preset("loud"), Error);

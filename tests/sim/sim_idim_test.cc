@@ -93,7 +93,7 @@ TEST(SimIdimTest, TrueStatesAreConsistentWithTheirOwnDerivatives) {
   options.log_rate_hz = 1000.0;
   // Smooth rotor speeds (no noise in the loop, a motor lag), so that differences are accurate.
   options.noise = NoiseLevels::Preset("none");
-  options.effects.motor_tau_s = 0.02;
+  options.effects.Set("motor_tau_s", 0.02);
   const SimulationResult flight = Simulate(a.vehicle, a.parameters, options);
   const TrueStates& s = flight.states;
   double worst = 0.0, scale = 0.0;

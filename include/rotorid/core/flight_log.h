@@ -1,10 +1,9 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <map>
 #include <optional>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "rotorid/core/units.h"
 
@@ -12,19 +11,21 @@ namespace rotorid {
 
 // Motion capture track, on the same time base as the flight log.
 struct MocapTrack {
-  Eigen::MatrixX3d position_w_m;   // position of O_d in the world frame (z up)
-  Eigen::MatrixX3d bryant_rad;     // roll, pitch, yaw with R = Rz(yaw) Ry(pitch) Rx(roll)
+  Eigen::MatrixX3d position_w_m;  // position of O_d in the world frame (z up)
+  Eigen::MatrixX3d bryant_rad;    // roll, pitch, yaw with R = Rz(yaw) Ry(pitch) Rx(roll)
 };
 
 // One flight on one time base (INTERFACE.md section 2). Rows are samples.
 struct FlightLog {
-  std::string source;                   // where it came from, for messages
-  Eigen::VectorXd t_s;                  // strictly increasing; jitter allowed
-  Eigen::MatrixX3d gyro_radps;          // IMU-frame angular velocity
-  Eigen::MatrixX3d acc_mps2;            // IMU-frame specific force (about +g on z in hover)
-  Eigen::MatrixXd rotor_radps;          // |Omega_i| per rotor (or the rotor signal standing for it)
+  std::string source;           // where it came from, for messages
+  Eigen::VectorXd t_s;          // strictly increasing; jitter allowed
+  Eigen::MatrixX3d gyro_radps;  // IMU-frame angular velocity
+  Eigen::MatrixX3d acc_mps2;    // IMU-frame specific force (about +g on z in hover)
+  Eigen::MatrixXd rotor_radps;  // |Omega_i| per rotor (or the rotor signal standing for it)
   std::optional<MocapTrack> mocap;
   std::optional<Eigen::VectorXd> voltage_v;
+  // The raw motor command when rotor_radps was mapped from it (the vehicle's command_to_speed).
+  std::optional<Eigen::MatrixXd> rotor_command;
   double gravity_mps2 = kStandardGravity;
   std::map<std::string, std::string> metadata;
 

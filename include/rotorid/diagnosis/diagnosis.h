@@ -17,13 +17,12 @@
 // from clean simulated flights. A backward pass then drops a kept effect that is no longer
 // significant on top of the others.
 
+#include <Eigen/Core>
 #include <functional>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rotorid/diagnosis/gap_location.h"
 #include "rotorid/ident/identify.h"
@@ -35,7 +34,7 @@ struct DiagnosisOptions {
   // Signal processing and TLS of the linear model (the baseline).
   IdentifyOptions identify;
   // Effects considered as causes of the gap.
-  std::vector<EffectKind> candidates = {kAllEffectKinds.begin(), kAllEffectKinds.end()};
+  std::vector<EffectKind> candidates = AllEffects();
   // Time-blocked folds per flight when no held-out flights are given.
   int folds = 4;
   // Rows within this many seconds of a held-out block are left out of its training data, so that
@@ -85,20 +84,20 @@ struct HeldOutGap {
   // propagated through the regressor) and the rest, sqrt(max(0, gap^2 - floor^2)): the model error.
   std::vector<std::optional<double>> noise_floor_pct;
   std::vector<std::optional<double>> model_error_pct;
-  double whitened_ssr = 0.0;  // sum of squared residuals, each flight and component scaled so that the
-                              // baseline's mean square is 1
-  int entries = 0;            // residual entries (6 per held-out row sample)
+  double whitened_ssr = 0.0;            // sum of squared residuals, each flight and component scaled so that the
+                                        // baseline's mean square is 1
+  int entries = 0;                      // residual entries (6 per held-out row sample)
   double autocorrelation_factor = 1.0;  // variance inflation of the whitened residuals
 };
 
 // Whether adding effects to a model removes significantly more held-out residual than noise.
 struct EffectTest {
-  double shrink_pct = 0.0;        // 100 (1 - SSR_with / SSR_without), whitened held-out residual
-  double f_statistic = 0.0;       // ((SSR_without - SSR_with) / q) / (SSR_with / (n_eff - q))
+  double shrink_pct = 0.0;   // 100 (1 - SSR_with / SSR_without), whitened held-out residual
+  double f_statistic = 0.0;  // ((SSR_without - SSR_with) / q) / (SSR_with / (n_eff - q))
   double p_value = 1.0;
-  int added_parameters = 0;       // q
+  int added_parameters = 0;        // q
   double effective_samples = 0.0;  // n_eff = entries / autocorrelation factor
-  bool significant = false;       // p < alpha and shrink_pct > min_shrink_pct
+  bool significant = false;        // p < alpha and shrink_pct > min_shrink_pct
   // Not refined in the folds: shrink_pct, F and p are the linearised in-sample ones (a score test),
   // which were below the screening threshold.
   bool screened = false;
@@ -106,17 +105,17 @@ struct EffectTest {
 
 // One candidate effect, as the diagnosis judged it.
 struct EffectVerdict {
-  EffectKind kind = EffectKind::kDelay;
+  EffectKind kind = nullptr;
   // "selected", "confounded" (significant alone, but indistinguishable from a selected effect) or
   // "not significant".
   std::string status;
   bool selected = false;
   bool significant = false;
-  int step = 0;           // forward-selection step at which it was last tested (1-based)
+  int step = 0;                              // forward-selection step at which it was last tested (1-based)
   std::vector<EffectKind> tested_on_top_of;  // the effects already selected at that step
-  EffectTest test;        // added on top of tested_on_top_of
-  std::optional<EffectTest> alone_test;  // added to the linear model alone (step 1)
-  EffectTest screening;                  // first-order in-sample test at `step` (always computed)
+  EffectTest test;                           // added on top of tested_on_top_of
+  std::optional<EffectTest> alone_test;      // added to the linear model alone (step 1)
+  EffectTest screening;                      // first-order in-sample test at `step` (always computed)
   // Magnitude: selected effects from the final fit on all data, the others the mean of their fold
   // fits; std from the linearised criterion (chi and the selected effects profiled out, inflated
   // for autocorrelation).
@@ -134,8 +133,8 @@ struct EffectVerdict {
 };
 
 struct ConfoundedEffects {
-  EffectKind selected = EffectKind::kDelay;
-  EffectKind other = EffectKind::kMotorLag;
+  EffectKind selected = nullptr;
+  EffectKind other = nullptr;
   // Largest |correlation| between their parameters with both in the final model (linearised
   // criterion on all data), with the labels it occurs between.
   std::optional<double> correlation;
@@ -153,7 +152,7 @@ struct ConfoundedEffects {
 // One kept effect, in the order they were added: the held-out gap before and after (on top of the
 // kept effects added before it).
 struct SelectionStep {
-  EffectKind added = EffectKind::kDelay;
+  EffectKind added = nullptr;
   HeldOutGap before;
   HeldOutGap after;
   EffectTest test;
@@ -163,13 +162,13 @@ struct Diagnosis {
   std::string validation;  // "4 time-blocked folds of 1 flight" or "2 held-out flights"
   int held_out_row_samples = 0;
   std::vector<EffectKind> candidates;
-  HeldOutGap baseline;     // linear model, held-out
+  HeldOutGap baseline;      // linear model, held-out
   int where_component = 0;  // largest baseline model_error_pct (the gap beyond the noise floor)
   GapLocation where;
   std::vector<EffectVerdict> ranking;  // selected in order, then the others by shrink
   std::vector<EffectKind> selected;
   std::vector<SelectionStep> steps;
-  HeldOutGap final_gap;    // with the selected effects, held-out
+  HeldOutGap final_gap;  // with the selected effects, held-out
   // The final model fitted on all identification data.
   std::map<std::string, double> linear_parameters;
   std::map<std::string, double> final_parameters;

@@ -8,13 +8,12 @@
 // delay and lag the derivative of the rotor wrench, for acc bias and misalignment mostly the
 // gravity direction), with the parameters chi projected out.
 
+#include <Eigen/Core>
 #include <map>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rotorid/ident/identify.h"
 #include "rotorid/model/effects.h"
@@ -53,10 +52,10 @@ struct FlightStretch {
   double end_s = 0.0;
   // Mean square of the scaled residual in the window over that of the whole flight (1: average).
   double mean_square_ratio = 0.0;
-  int dominant_component = 0;  // largest scaled mean square in the window
-  std::vector<std::optional<double>> relative_error_pct;  // Table III in the window
+  int dominant_component = 0;                                      // largest scaled mean square in the window
+  std::vector<std::optional<double>> relative_error_pct;           // Table III in the window
   Eigen::Vector3d angular_velocity_rms = Eigen::Vector3d::Zero();  // rad/s
-  double mean_vertical_acceleration_mps2 = 0.0;  // mean specific force along z_d minus g
+  double mean_vertical_acceleration_mps2 = 0.0;                    // mean specific force along z_d minus g
   // "climbing" / "descending" (net thrust above / below the weight), "rolling", "pitching",
   // "yawing" (rates well above the flight's typical); else "hovering" (rates well below it) or
   // "typical manoeuvring".
@@ -64,14 +63,14 @@ struct FlightStretch {
 };
 
 struct EffectSignature {
-  EffectKind kind = EffectKind::kDelay;
+  EffectKind kind = nullptr;
   std::vector<std::string> labels;  // delay_s, acc_bias_x, ...
   // Cosine between the scaled residual and each parameter's signature (chi projected out): its
   // square is the share of the residual a fit of that parameter alone removes (to first order).
   Eigen::VectorXd residual_correlation;
   Eigen::VectorXd linearized_estimate;  // one Gauss-Newton step from zero, all its parameters jointly
   Eigen::VectorXd linearized_std;
-  double linearized_shrink_pct = 0.0;   // in-sample residual removed by that step
+  double linearized_shrink_pct = 0.0;                             // in-sample residual removed by that step
   ComponentVector component_share_pct = ComponentVector::Zero();  // where the signature's energy lies
 };
 

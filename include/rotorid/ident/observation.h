@@ -4,13 +4,13 @@
 // uniform time base, the same zero-phase low-pass on every signal, differentiation, the choice
 // of the samples that become rows, and the noise levels the default TLS needs.
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "rotorid/core/flight_log.h"
 #include "rotorid/core/vehicle.h"
+#include "rotorid/model/effects.h"
 #include "rotorid/signal/butterworth.h"
 
 namespace rotorid {
@@ -35,8 +35,8 @@ struct ObservationOptions {
 
 // White-noise standard deviations of the filtered signals that enter the regressor, per axis.
 struct SignalNoise {
-  Eigen::Vector3d specific_force = Eigen::Vector3d::Zero();     // m/s^2
-  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();   // rad/s
+  Eigen::Vector3d specific_force = Eigen::Vector3d::Zero();        // m/s^2
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();      // rad/s
   Eigen::Vector3d angular_acceleration = Eigen::Vector3d::Zero();  // rad/s^2
 };
 
@@ -47,19 +47,29 @@ struct ProcessedFlight {
   Vehicle vehicle;
   double weight = 1.0;
   double dt_s = 0.0;
-  Eigen::VectorXd t_s;                 // uniform base time
-  Eigen::MatrixX3d specific_force;     // s, IMU (or body) frame, filtered
-  Eigen::MatrixX3d angular_velocity;   // w, filtered
+  Eigen::VectorXd t_s;                    // uniform base time
+  Eigen::MatrixX3d specific_force;        // s, IMU (or body) frame, filtered
+  Eigen::MatrixX3d angular_velocity;      // w, filtered
   Eigen::MatrixX3d angular_acceleration;  // w', derivative of the filtered w
-  Eigen::MatrixXd rotor_raw;           // rotor signal |Omega_i| on the base time, unfiltered
-  Eigen::MatrixXd rotor;               // sqrt of the filtered Omega_i^2: the rotor columns are linear in
-                                       // Omega^2, so it is Omega^2 that goes through the low-pass
-  SosFilter filter;                    // the low-pass applied to every signal
-  std::vector<int> row_samples;        // indices of the samples that become rows
-  SignalNoise noise;                   // of the filtered signals at the base rate
+  Eigen::MatrixXd rotor_raw;              // rotor signal |Omega_i| on the base time, unfiltered
+  Eigen::MatrixXd rotor;                  // sqrt of the filtered Omega_i^2: the rotor columns are linear in
+                                          // Omega^2, so it is Omega^2 that goes through the low-pass
+  SosFilter filter;                       // the low-pass applied to every signal
+  std::vector<int> row_samples;           // indices of the samples that become rows
+  SignalNoise noise;                      // of the filtered signals at the base rate
   double gravity_mps2 = kStandardGravity;
+  // Inputs effects may need (EffectDescriptor::Info::inputs), on the base time, where the log has
+  // them: the rotor acceleration (derivative of the filtered rotor speed) always; the raw command
+  // next to the mapped speed; from motion capture the velocity of O_d in F_d and the height above
+  // ground (z of O_d in the motion-capture frame, whose origin is on the floor); the voltage.
+  Eigen::MatrixXd rotor_acceleration;
+  std::optional<Eigen::MatrixXd> rotor_command;
+  std::optional<Eigen::MatrixX3d> velocity_mps;
+  std::optional<Eigen::VectorXd> height_m;
+  std::optional<Eigen::VectorXd> voltage_v;
 
   int num_rows_samples() const { return static_cast<int>(row_samples.size()); }
+  FlightInputs inputs() const;
 };
 
 // sqrt(filtfilt(Omega^2)) per column: the rotor signal that enters the rows.

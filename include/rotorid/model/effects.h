@@ -1,49 +1,239 @@
 #pragma once
 
-// The unmodelled effects of INTERFACE.md section 1, with one meaning everywhere (simulator,
-// refinement, diagnosis, reports):
-//   delay         Omega_true(t) = Omega_log(t - delay_s)
-//   motor_lag     tau dOmega/dt = Omega_cmd - Omega   (Omega_cmd: the delayed log signal)
-//   acc_bias      acc_log  = Exp(r) s_body + acc_bias + noise
-//   gyro_bias     gyro_log = Exp(r) w_body + gyro_bias + noise
-//   misalignment  r = misalignment_rad, a rotation vector: v_imu = Exp(r) v_body
-
-#include <array>
-#include <string>
-#include <vector>
+// The unmodelled effects (INTERFACE.md section 1 and "Effects of real vehicles (v2)") as open,
+// self-describing blocks. Each effect is one EffectDescriptor, defined in its own source file
+// (src/model/effect_<name>.cc) together with its models, and listed by one line in the registry
+// (src/model/effect_registry.cc). Nothing else in the library names a specific effect: the
+// simulator, the refinement, the diagnosis and the reports loop over the descriptors.
+// docs/adding_an_effect.md walks through adding one.
+//
+// Conventions every effect follows:
+//   - an all-zero value means "absent" (the rows are then exactly the effect-free ones);
+//   - its models are templated on the scalar (double and ceres::Jet) and live in its file; the
+//     library calls them through the virtual hooks of its stage below.
 
 #include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace ceres {
+template <typename T, int N>
+struct Jet;
+}  // namespace ceres
 
 namespace rotorid {
 
-enum class EffectKind { kDelay, kMotorLag, kAccBias, kGyroBias, kMisalignment };
-inline constexpr int kNumEffectKinds = 5;
-inline constexpr std::array<EffectKind, kNumEffectKinds> kAllEffectKinds = {
-    EffectKind::kDelay, EffectKind::kMotorLag, EffectKind::kAccBias, EffectKind::kGyroBias, EffectKind::kMisalignment};
+struct Vehicle;
 
-// "delay", "motor_lag", "acc_bias", "gyro_bias", "misalignment".
-const char* EffectName(EffectKind kind);
-// The parameter's name in reports: "delay_s", "motor_tau_s", "acc_bias", "gyro_bias", "misalignment_rad".
-const char* EffectParameterName(EffectKind kind);
-// Number of scalar parameters: 1 for delay and motor_lag, 3 for the others.
+// Where in the chain from the true physics to the logged signals an effect acts.
+enum class EffectStage {
+  kRotorSignal,  // the logged rotor signal -> the rotor speeds acting (a whole time series)
+  kImuSensor,    // the true body motion at O_b -> the logged gyro and accelerometer
+};
+
+// Flight signals an effect's model may need beyond gyro, accelerometer and rotor signal.
+enum class FlightInput {
+  kVelocity,           // velocity of O_d in F_d (motion capture, differentiated, or velocity columns)
+  kHeight,             // height above ground
+  kVoltage,            // battery voltage
+  kRotorAcceleration,  // Omega_i'
+  kRotorCommand,       // the raw command next to the speed mapped from it
+};
+// Which of them a processed flight carries.
+struct FlightInputs {
+  bool velocity = false, height = false, voltage = false, rotor_acceleration = false, rotor_command = false;
+  bool Has(FlightInput input) const;
+};
+const char* FlightInputName(FlightInput input);
+
+// The IMU signals at one sample: gyro w, its derivative w', accelerometer s.
+template <typename T>
+struct ImuSample {
+  Eigen::Matrix<T, 3, 1> angular_velocity, angular_acceleration, specific_force;
+};
+
+// The scalar types the library evaluates effect models with: the derivatives of IMU effects are
+// taken in passes of kImuJetSize (or kWideImuJetSize) coordinates, those of rotor-signal effects,
+// which run over whole time series, in passes of kRotorJetSize.
+inline constexpr int kImuJetSize = 4;
+inline constexpr int kWideImuJetSize = 12;
+inline constexpr int kRotorJetSize = 2;
+using ImuJet = ceres::Jet<double, kImuJetSize>;
+using WideImuJet = ceres::Jet<double, kWideImuJetSize>;
+using RotorJet = ceres::Jet<double, kRotorJetSize>;
+
+// How the simulator's studies draw an effect at a realistic size.
+enum class DrawShape {
+  kUniform,          // each coordinate uniform in [low, high]
+  kSignedPerAxis,    // each coordinate: random sign times uniform in [low, high]
+  kRandomDirection,  // a direction uniform on the sphere times a norm uniform in [low, high]
+};
+struct DrawRange {
+  DrawShape shape = DrawShape::kUniform;
+  double low = 0.0, high = 0.0;  // in the units the range is written in
+  double to_si = 1.0;            // factor from those units to SI
+};
+
+// What the simulator accepts (beyond it its controller cannot fly the pilot's references).
+struct SimulatorLimit {
+  bool per_coordinate = true;  // [low, high] per coordinate, else the norm <= high
+  double low = 0.0, high = 0.0;
+};
+
+class EffectDescriptor {
+ public:
+  struct Info {
+    std::string name;            // "delay", as --effects takes it
+    std::string parameter_name;  // "delay_s", as reports and --effect name=value write it
+    std::string unit;            // SI unit of the parameter, "s"
+    std::string meaning;         // one line: the model and its sign convention
+    EffectStage stage = EffectStage::kImuSensor;
+    // Place in the chain of its stage, from the physics (0) towards the log: the simulator applies
+    // the stage's effects in increasing order, the model's correction in decreasing order.
+    int chain_position = 0;
+    int dimension = 1;  // scalar parameters (a per-rotor effect overrides Dimension)
+    // Physical bounds per coordinate kept by the refinement; an estimate ending on a non-zero
+    // bound is reported as such.
+    double lower_bound = 0.0, upper_bound = 0.0;
+    // Whether the refinement starts it from a global grid search of the criterion (over the
+    // options' search range, which then also bounds it).
+    bool grid_searched = false;
+    // Values the diagnosis screens a strongly nonlinear scalar effect over (empty: linear enough
+    // for the first-order screening alone; a grid-searched effect uses its search range).
+    std::vector<double> screening_grid;
+    DrawRange draw;
+    SimulatorLimit simulator_limit;
+    // Change between refinement passes below which it has settled when no std is computed: a
+    // hundredth of the smallest sizes a 90 s flight reveals (refinement study).
+    double settle_tolerance = 0.0;
+    // Reporting: value * display_scale in display_unit ("ms", "deg").
+    double display_scale = 1.0;
+    std::string display_unit;
+    // The flight signals its model needs (beyond gyro, accelerometer, rotor signal).
+    std::vector<FlightInput> inputs;
+  };
+
+  explicit EffectDescriptor(Info info) : info_(std::move(info)) {}
+  virtual ~EffectDescriptor() = default;
+  EffectDescriptor(const EffectDescriptor&) = delete;
+  EffectDescriptor& operator=(const EffectDescriptor&) = delete;
+
+  const Info& info() const { return info_; }
+  const std::string& name() const { return info_.name; }
+  const std::string& parameter_name() const { return info_.parameter_name; }
+  EffectStage stage() const { return info_.stage; }
+  // Position in the registry (report order, simulator draw streams, bit masks).
+  int index() const { return index_; }
+  // Number of scalar parameters for this vehicle.
+  virtual int Dimension(const Vehicle& vehicle) const;
+  // Dimension without a vehicle, or -1 when it depends on one.
+  virtual int FixedDimension() const { return info_.dimension; }
+  // Labels of the scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.
+  std::vector<std::string> Labels(int dimension) const;
+  // The value formatted for people: "12.3 +- 0.4 ms", "(1, 2, 3) deg".
+  std::string Format(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const;
+  // Empty when the simulator accepts the value, else the reason.
+  std::string CheckSimulatable(const Eigen::VectorXd& value) const;
+  // Empty when a flight with these inputs can carry the effect, else why it is unavailable
+  // ("needs the velocity (motion capture or velocity columns), which this log lacks").
+  std::string Unavailable(const FlightInputs& available) const;
+  // Clamps a value into the physical bounds.
+  Eigen::VectorXd Clamp(const Eigen::VectorXd& value) const;
+
+  // kImuSensor: the model's correction (logged -> body at O_b) with parameters p, and the
+  // simulator's forward sensor model (body -> logged, before the noise).
+  virtual void CorrectImu(const double* p, ImuSample<double>* sample) const;
+  virtual void CorrectImu(const ImuJet* p, ImuSample<ImuJet>* sample) const;
+  virtual void CorrectImu(const WideImuJet* p, ImuSample<WideImuJet>* sample) const;
+  virtual void ApplyToSensor(const double* p, ImuSample<double>* sample) const;
+
+  // kRotorSignal: one rotor's signal at the base rate (time step dt) -> what acts after this
+  // effect, for the model; and the simulator's view of it: the delay it adds to the command and
+  // the time constant of the first-order lag it adds between command and rotor.
+  virtual void TransformRotorSignal(const double* p, double dt, const Eigen::VectorXd& in, Eigen::VectorXd* out) const;
+  virtual void TransformRotorSignal(const RotorJet* p, double dt, const Eigen::Matrix<RotorJet, -1, 1>& in,
+                                    Eigen::Matrix<RotorJet, -1, 1>* out) const;
+  virtual double SimulatedCommandDelay(const Eigen::VectorXd& /*value*/) const { return 0.0; }
+  virtual double SimulatedMotorTimeConstant(const Eigen::VectorXd& /*value*/) const { return 0.0; }
+  // The value that gives a rotor-signal effect about this delay of the rotor signal (the
+  // diagnosis starts it from the coarse delay search), clamped into its bounds.
+  virtual Eigen::VectorXd FromEquivalentDelay(double delay_s) const;
+
+ private:
+  friend const std::vector<const EffectDescriptor*>& AllEffects();
+  Info info_;
+  mutable int index_ = -1;  // set once by the registry
+};
+
+// An effect is named by its descriptor.
+using EffectKind = const EffectDescriptor*;
+
+// Orders effects as the registry lists them (for maps and sets with a reproducible order).
+struct EffectOrder {
+  bool operator()(EffectKind a, EffectKind b) const { return a->index() < b->index(); }
+};
+
+// Every registered effect, in report order.
+const std::vector<EffectKind>& AllEffects();
+// Registered effects acting on `stage`, in chain order.
+std::vector<EffectKind> EffectsOfStage(EffectStage stage);
+
+inline const char* EffectName(EffectKind kind) { return kind->name().c_str(); }
+inline const char* EffectParameterName(EffectKind kind) { return kind->parameter_name().c_str(); }
+// Dimension without a vehicle (the fixed-size effects).
 int EffectDimension(EffectKind kind);
 // Parses an effect name (either form above); throws rotorid::Error listing the valid names.
 EffectKind ParseEffectKind(const std::string& name);
 // Parses "a,b,c" effect lists ("all" for every effect); throws rotorid::Error on unknown names.
 std::vector<EffectKind> ParseEffectList(const std::string& list);
 
-struct Effects {
-  double delay_s = 0.0;
-  double motor_tau_s = 0.0;
-  Eigen::Vector3d acc_bias = Eigen::Vector3d::Zero();
-  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
-  Eigen::Vector3d misalignment_rad = Eigen::Vector3d::Zero();
+// The value of a double or of a ceres::Jet (its .a), for decisions that carry no derivative.
+template <typename T>
+double ScalarPart(const T& x) {
+  if constexpr (std::is_arithmetic_v<T>) {
+    return static_cast<double>(x);
+  } else {
+    return x.a;
+  }
+}
 
-  // The parameters of one effect as a vector (size EffectDimension(kind)), and setting them.
+// Values of effects, keyed by descriptor; an effect without a value is absent (zero).
+class Effects {
+ public:
+  // The value (size EffectDimension(kind)), zeros when not set.
   Eigen::VectorXd Get(EffectKind kind) const;
+  // By name (either form), for tests and tools.
+  Eigen::VectorXd Get(const std::string& name) const { return Get(ParseEffectKind(name)); }
+  double Scalar(EffectKind kind) const { return Get(kind)[0]; }
+  double Scalar(const std::string& name) const { return Get(name)[0]; }
   void Set(EffectKind kind, const Eigen::Ref<const Eigen::VectorXd>& value);
+  void Set(EffectKind kind, double value) { Set(kind, Eigen::VectorXd::Constant(1, value)); }
+  void Set(const std::string& name, const Eigen::Ref<const Eigen::VectorXd>& value) {
+    Set(ParseEffectKind(name), value);
+  }
+  void Set(const std::string& name, double value) { Set(ParseEffectKind(name), value); }
+  // True when the effect has no non-zero value.
+  bool IsZero(EffectKind kind) const;
+  // True when every effect of the stage is absent.
+  bool StageIsZero(EffectStage stage) const;
   // Applies "name=value" or "name=x,y,z" (name in either form above). Throws rotorid::Error.
   void Assign(const std::string& assignment);
+
+ private:
+  std::vector<Eigen::VectorXd> values_;  // by registry index; empty: absent
 };
+
+// The effects of one stage that act, in chain order, with their values.
+struct EffectChain {
+  std::vector<EffectKind> kinds;
+  std::vector<Eigen::VectorXd> values;
+  // Pointers to the values, as the stage hooks take them (valid while the chain lives).
+  std::vector<const double*> Parameters() const;
+};
+// The effects of `stage` that are non-zero in `effects` or listed in `also` (free ones, whose
+// derivative is wanted even at zero).
+EffectChain ActingEffects(const Effects& effects, EffectStage stage, const std::vector<EffectKind>& also = {});
 
 }  // namespace rotorid

@@ -29,10 +29,13 @@ struct DelayEstimate {
   double motor_tau_std_s = 0.0;
   double grid_best_s = 0.0;
   std::vector<double> grid_s;
-  std::vector<double> criterion;   // TLS criterion at each grid delay
+  std::vector<double> criterion;  // TLS criterion at each grid delay
   RefineResult refined;
   std::vector<std::string> warnings;
 };
+
+// The effect this estimates (the registry's `delay`).
+EffectKind DelayEffect();
 
 DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options);
 

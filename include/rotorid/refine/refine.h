@@ -18,10 +18,11 @@ namespace rotorid {
 
 struct RefineOptions {
   // Effects whose parameters are estimated; the others are held at their initial values.
-  std::vector<EffectKind> effects = {kAllEffectKinds.begin(), kAllEffectKinds.end()};
+  std::vector<EffectKind> effects = AllEffects();
   // Initial (and, for disabled effects, fixed) values.
   Effects initial;
-  // With delay enabled: start from a global search of the TLS criterion over this delay range.
+  // Grid-searched effects (the delay) start from a global search of the TLS criterion over this
+  // range, which also bounds them.
   bool coarse_delay_search = true;
   double delay_search_min_s = -0.1;
   double delay_search_max_s = 0.2;
@@ -29,11 +30,8 @@ struct RefineOptions {
   // Robust loss on the whitened residuals: "none", "huber" or "cauchy", with its scale.
   std::string robust_loss = "none";
   double robust_scale = 3.0;
-  // Physical ranges the effects are kept in (beyond them the model is not what is wrong); an
-  // estimate that ends on a bound is reported as such. The delay is kept in the search range.
-  double max_motor_tau_s = 0.3;
-  double max_acc_bias_mps2 = 2.0;
-  double max_gyro_bias_radps = 0.2;
+  // The other effects are kept in the physical bounds of their descriptors (beyond them the model
+  // is not what is wrong); an estimate that ends on a bound is reported as such.
   int max_iterations = 100;
   bool compute_covariance = true;
   int num_threads = 1;
@@ -88,9 +86,9 @@ struct RefineResult {
 
 RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options);
 
-// The coarse global delay search Refine starts from (options.delay_search_*, the other effects at
-// options.initial): the grid delay with the smallest TLS criterion.
-double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options);
+// The coarse global search Refine starts a grid-searched effect from (options.delay_search_*, the
+// other effects at options.initial): the grid value with the smallest TLS criterion.
+double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind);
 
 // Table III of several flights with named parameters and effects applied.
 std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<ProcessedFlight>& flights,

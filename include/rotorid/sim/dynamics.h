@@ -39,12 +39,12 @@ class MultirotorDynamics {
   // The rotor speed command (rad/s, one entry per rotor) the motors follow at time t.
   using RotorCommand = std::function<Eigen::VectorXd(double t_s)>;
 
-  // gravity_mps2 >= 0 is g in g_w = [0, 0, -g]; motor_tau_s >= 0. A vehicle without rotors is
+  // gravity_mps2 >= 0 is g in g_w = [0, 0, -g]; motor_time_constant_s >= 0. A vehicle without rotors is
   // allowed (a free body). Throws rotorid::Error when the spatial inertia is not positive definite.
   MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                     double motor_tau_s);
+                     double motor_time_constant_s);
 
-  // The rotor speeds acting at time t: the lag state, or the command itself when motor_tau_s = 0.
+  // The rotor speeds acting at time t: the lag state, or the command itself when motor_time_constant_s = 0.
   Eigen::VectorXd ActingRotorSpeeds(double t_s, const SimState& state, const RotorCommand& command) const;
   // s and w' of the body in `state` under the rotor wrench of these rotor speeds.
   BodyAcceleration Accelerations(const SimState& state, const Eigen::VectorXd& rotor_speed_radps) const;
@@ -54,7 +54,7 @@ class MultirotorDynamics {
 
   const Vehicle& vehicle() const { return vehicle_; }
   const VehicleParameters& parameters() const { return parameters_; }
-  double motor_tau_s() const { return motor_tau_s_; }
+  double motor_time_constant_s() const { return motor_time_constant_s_; }
   Eigen::Vector3d gravity_w_mps2() const { return gravity_w_; }
 
  private:
@@ -66,7 +66,7 @@ class MultirotorDynamics {
   Vehicle vehicle_;
   VehicleParameters parameters_;
   Eigen::Vector3d gravity_w_;
-  double motor_tau_s_;
+  double motor_time_constant_s_;
 };
 
 // Torque-free motion (no gravity, no rotors) of a body with mass, first moment and inertia at O_d,

@@ -7,7 +7,7 @@
 //   SimulationVehicle a = PresetVehicle("A");
 //   SimulationOptions options;
 //   options.duration_s = 30;
-//   options.effects.delay_s = 0.01;
+//   options.effects.Set("delay", 0.01);
 //   SimulationResult flight = Simulate(a.vehicle, a.parameters, options);
 //   // flight.log: what a real log would hold; flight.states: the noise-free truth per sample.
 

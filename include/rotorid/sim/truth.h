@@ -4,8 +4,7 @@
 //
 //   {"vehicle": "A", "mass": 1.285,
 //    "parameters": {"kt": .., "kd": .., "A.ms_x": .., ..., "A.I_yz": ..},      plain numbers
-//    "effects": {"delay_s": .., "motor_tau_s": .., "acc_bias": [3], "gyro_bias": [3],
-//                "misalignment_rad": [3]},
+//    "effects": {<parameter name>: value or [values], one per registered effect},
 //    "noise": {"preset": .., "gyro_std_radps": .., "acc_std_mps2": .., ...}, "seed": 1,
 //    "parameters_source": "...", "simulation": {...options...}, "controller_model": {...}}
 

@@ -1,0 +1,54 @@
+#pragma once
+
+// Internal: turns an effect's templated models into the virtual hooks of EffectDescriptor, so that
+// an effect's file holds its models once, templated on the scalar, and the library calls them for
+// doubles and for each Jet type it differentiates with.
+//
+//   struct MyImuModel {
+//     template <typename T> static void Correct(const T* p, ImuSample<T>* sample);        // model
+//     template <typename T> static void ApplyToSensor(const T* p, ImuSample<T>* sample);  // simulator
+//   };
+//   const EffectDescriptor& MyEffect() { static const ImuEffect<MyImuModel> e(Info{...}); return e; }
+
+#include <ceres/jet.h>
+
+#include "rotorid/model/effects.h"
+
+namespace rotorid::internal {
+
+template <class Model>
+class ImuEffect final : public EffectDescriptor {
+ public:
+  explicit ImuEffect(Info info) : EffectDescriptor(std::move(info)) {}
+  void CorrectImu(const double* p, ImuSample<double>* s) const override { Model::Correct(p, s); }
+  void CorrectImu(const ImuJet* p, ImuSample<ImuJet>* s) const override { Model::Correct(p, s); }
+  void CorrectImu(const WideImuJet* p, ImuSample<WideImuJet>* s) const override { Model::Correct(p, s); }
+  void ApplyToSensor(const double* p, ImuSample<double>* s) const override { Model::ApplyToSensor(p, s); }
+};
+
+//   struct MyRotorModel {
+//     template <typename T> static void Transform(const T* p, double dt, const VectorT& in, VectorT* out);
+//     static double CommandDelay(const Eigen::VectorXd& v);        // what the simulator delays by
+//     static double MotorTimeConstant(const Eigen::VectorXd& v);   // the lag the simulator adds
+//     static double EquivalentValue(double delay_s);               // about this rotor-signal delay
+//   };
+template <class Model>
+class RotorSignalEffect final : public EffectDescriptor {
+ public:
+  explicit RotorSignalEffect(Info info) : EffectDescriptor(std::move(info)) {}
+  void TransformRotorSignal(const double* p, double dt, const Eigen::VectorXd& in,
+                            Eigen::VectorXd* out) const override {
+    Model::Transform(p, dt, in, out);
+  }
+  void TransformRotorSignal(const RotorJet* p, double dt, const Eigen::Matrix<RotorJet, -1, 1>& in,
+                            Eigen::Matrix<RotorJet, -1, 1>* out) const override {
+    Model::Transform(p, dt, in, out);
+  }
+  double SimulatedCommandDelay(const Eigen::VectorXd& v) const override { return Model::CommandDelay(v); }
+  double SimulatedMotorTimeConstant(const Eigen::VectorXd& v) const override { return Model::MotorTimeConstant(v); }
+  Eigen::VectorXd FromEquivalentDelay(double delay_s) const override {
+    return Clamp(Eigen::VectorXd::Constant(1, Model::EquivalentValue(delay_s)));
+  }
+};
+
+}  // namespace rotorid::internal

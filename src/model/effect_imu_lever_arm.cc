@@ -1,0 +1,56 @@
+// `imu_lever_arm` (INTERFACE.md, "Effects of real vehicles (v2)"): the IMU sits at r =
+// imu_position_m (in F_d), not at O_d, so its accelerometer reads the specific force at r,
+//   s_r = s + w' x r + w x (w x r),
+// before the misalignment, the bias and the noise; the gyro is unaffected. It is first in the
+// sensor chain (next to the physics). Near hover r trades against ms / m (MODEL.md sections 4
+// and 8): flights that spin or roll separate them through the centripetal term.
+
+#include <Eigen/Geometry>
+
+#include "model/effect_adapter.h"
+
+namespace rotorid::internal {
+namespace {
+
+struct ImuLeverArmModel {
+  template <typename T>
+  static Eigen::Matrix<T, 3, 1> Offset(const T* p, const ImuSample<T>& s) {
+    const Eigen::Matrix<T, 3, 1> r(p[0], p[1], p[2]);
+    return s.angular_acceleration.cross(r) + s.angular_velocity.cross(s.angular_velocity.cross(r));
+  }
+  // s = s_r - w' x r - w x (w x r), with the body-frame w and w' (already corrected).
+  template <typename T>
+  static void Correct(const T* p, ImuSample<T>* s) {
+    s->specific_force -= Offset(p, *s);
+  }
+  template <typename T>
+  static void ApplyToSensor(const T* p, ImuSample<T>* s) {
+    s->specific_force += Offset(p, *s);
+  }
+};
+
+}  // namespace
+
+const EffectDescriptor& ImuLeverArmEffect() {
+  static const ImuEffect<ImuLeverArmModel> effect([] {
+    EffectDescriptor::Info i;
+    i.name = "imu_lever_arm";
+    i.parameter_name = "imu_position_m";
+    i.unit = "m";
+    i.meaning = "accelerometer at r = imu_position_m (F_d): s_r = s + w' x r + w x (w x r)";
+    i.stage = EffectStage::kImuSensor;
+    i.chain_position = 0;
+    i.dimension = 3;
+    i.lower_bound = -0.3;  // beyond any multirotor's frame
+    i.upper_bound = 0.3;
+    i.draw = {DrawShape::kRandomDirection, 0.01, 0.03};  // 1-3 cm: a flight controller off the centre
+    i.simulator_limit = {false, 0.0, 0.3};
+    i.settle_tolerance = 1e-4;  // 0.1 mm
+    i.display_scale = 1e3;
+    i.display_unit = "mm";
+    return i;
+  }());
+  return effect;
+}
+
+}  // namespace rotorid::internal

@@ -1,0 +1,45 @@
+#pragma once
+
+// Internal: the IDIM rows of a flight's row samples with effects, differentiated with respect to
+// the scalar coordinates of the free effects by ceres::Jet. The one model that the refinement's
+// residual blocks and the diagnosis' linearisation both evaluate, so that their derivatives
+// cannot disagree.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "rotorid/ident/observation.h"
+#include "rotorid/model/rigid_body.h"
+#include "rotorid/refine/effect_model.h"
+
+namespace rotorid::internal {
+
+class EffectRows {
+ public:
+  // `rotor`: the rotor signal at the row samples with derivatives with respect to the free
+  // rotor-signal effects (EffectiveRotorAtRows(flight, effects, free rotor-signal effects)); it
+  // must outlive this object.
+  EffectRows(const ProcessedFlight* flight, const Effects& effects, const std::vector<EffectKind>& free,
+             const EffectiveRotor* rotor);
+
+  // One free scalar coordinate: its effect (index into `free`), its index in the effect, and for
+  // rotor-signal effects its derivative in `rotor` (else -1).
+  struct Coordinate {
+    int effect, index, rotor_derivative;
+  };
+  const std::vector<Coordinate>& coordinates() const { return coordinates_; }
+
+  // The 6 rows of row sample `row_sample`; with T a Jet, its slot k is the derivative with respect
+  // to coordinate first + k (those beyond the last coordinate stay zero).
+  template <typename T>
+  Eigen::Matrix<T, 6, kNumIdimColumns> Rows(int row_sample, size_t first = 0) const;
+
+ private:
+  const ProcessedFlight* flight_;
+  const EffectiveRotor* rotor_;
+  EffectChain imu_;            // acting IMU effects (non-zero or free), chain order
+  std::vector<int> imu_free_;  // per link of imu_: index into `free`, or -1
+  std::vector<Coordinate> coordinates_;
+};
+
+}  // namespace rotorid::internal

@@ -1,0 +1,14 @@
+#pragma once
+
+// Internal: the one thread pool of the refinement and the diagnosis.
+
+#include <functional>
+
+namespace rotorid::internal {
+
+// Runs task(i) for every i in [0, count) on up to `threads` threads (in this thread when one),
+// each thread taking the next index as it finishes one. The first exception a task throws is
+// rethrown here after every thread has stopped.
+void ParallelFor(int count, int threads, const std::function<void(int)>& task);
+
+}  // namespace rotorid::internal

@@ -1,0 +1,117 @@
+// The effect registry and the generic effect values (include/rotorid/model/effects.h), and the
+// inputs a processed flight carries for effects that need more than the IMU and rotor signal.
+
+#include "rotorid/model/effects.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "rotorid/core/error.h"
+#include "rotorid/ident/observation.h"
+#include "rotorid/model/rotation.h"
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+
+namespace rotorid {
+namespace {
+
+TEST(EffectRegistryTest, NamesAreUniqueAndParseInEitherForm) {
+  std::set<std::string> names;
+  for (EffectKind kind : AllEffects()) {
+    EXPECT_TRUE(names.insert(kind->name()).second) << kind->name();
+    if (kind->parameter_name() != kind->name()) {
+      EXPECT_TRUE(names.insert(kind->parameter_name()).second);
+    }
+    EXPECT_EQ(ParseEffectKind(kind->name()), kind);
+    EXPECT_EQ(ParseEffectKind(kind->parameter_name()), kind);
+    EXPECT_EQ(AllEffects()[static_cast<size_t>(kind->index())], kind);
+    EXPECT_LT(kind->info().lower_bound, kind->info().upper_bound) << kind->name();
+    EXPECT_GT(kind->info().settle_tolerance, 0.0) << kind->name();
+  }
+  EXPECT_EQ(ParseEffectList("all"), AllEffects());
+  EXPECT_THROW(ParseEffectKind("wind"), Error);
+}
+
+// The five effects of INTERFACE.md section 1 keep their names, order and sizes.
+TEST(EffectRegistryTest, TheFirstFiveAreTheInterfaceEffects) {
+  const std::vector<std::pair<std::string, std::string>> expected = {{"delay", "delay_s"},
+                                                                     {"motor_lag", "motor_tau_s"},
+                                                                     {"acc_bias", "acc_bias"},
+                                                                     {"gyro_bias", "gyro_bias"},
+                                                                     {"misalignment", "misalignment_rad"}};
+  ASSERT_GE(AllEffects().size(), expected.size());
+  for (size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(AllEffects()[k]->name(), expected[k].first);
+    EXPECT_EQ(AllEffects()[k]->parameter_name(), expected[k].second);
+    EXPECT_EQ(EffectDimension(AllEffects()[k]), k < 2 ? 1 : 3);
+  }
+}
+
+TEST(EffectsTest, ValuesAreKeyedByDescriptorAndZeroWhenUnset) {
+  Effects e;
+  const EffectKind bias = ParseEffectKind("acc_bias");
+  EXPECT_TRUE(e.IsZero(bias));
+  EXPECT_EQ(e.Get(bias), Eigen::VectorXd::Zero(3));
+  e.Assign("acc_bias=0.1,-0.2,0.3");
+  EXPECT_EQ(e.Get("acc_bias"), Eigen::Vector3d(0.1, -0.2, 0.3));
+  EXPECT_FALSE(e.StageIsZero(EffectStage::kImuSensor));
+  EXPECT_TRUE(e.StageIsZero(EffectStage::kRotorSignal));
+  EXPECT_THROW(e.Set(bias, Eigen::VectorXd::Zero(2)), Error);
+  EXPECT_THROW(e.Assign("motor_tau_s=-0.01"), Error);  // its sign convention: tau >= 0
+  EXPECT_THROW(e.Assign("delay_s=abc"), Error);
+}
+
+TEST(EffectsTest, FormatUsesTheDisplayUnit) {
+  EXPECT_EQ(ParseEffectKind("delay")->Format(Eigen::VectorXd::Constant(1, 0.0123), Eigen::VectorXd()), "12.3 ms");
+  EXPECT_EQ(ParseEffectKind("acc_bias")->Format(Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::VectorXd()),
+            "(0.1, 0.2, 0.3) m/s^2");
+}
+
+// An effect that needs an input a log lacks is unavailable, with the reason.
+TEST(EffectsTest, MissingInputsMakeAnEffectUnavailable) {
+  EffectDescriptor::Info info;
+  info.name = "needs_velocity";
+  info.inputs = {FlightInput::kVelocity, FlightInput::kVoltage};
+  const EffectDescriptor effect(info);
+  FlightInputs available;
+  available.voltage = true;
+  const std::string reason = effect.Unavailable(available);
+  EXPECT_NE(reason.find("needs_velocity needs the velocity"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find("voltage"), std::string::npos) << reason;
+  available.velocity = true;
+  EXPECT_EQ(effect.Unavailable(available), "");
+}
+
+// A motion-capture flight carries the velocity of O_d in F_d and the height: against the
+// simulator's truth, within the low-pass' error.
+TEST(ProcessedFlightInputsTest, MocapFlightCarriesVelocityInTheBodyFrameAndHeight) {
+  const SimulationVehicle v = PresetVehicle("A");
+  SimulationOptions options;
+  options.duration_s = 20.0;
+  options.mocap = true;
+  options.noise = NoiseLevels::Preset("none");
+  const SimulationResult sim = Simulate(v.vehicle, v.parameters, options);
+  const ProcessedFlight flight = ProcessFlight(sim.log, sim.vehicle, 1.0, ObservationOptions());
+  ASSERT_TRUE(flight.inputs().velocity);
+  ASSERT_TRUE(flight.inputs().height);
+  EXPECT_FALSE(flight.inputs().voltage);
+  EXPECT_FALSE(flight.inputs().rotor_command);
+  EXPECT_TRUE(flight.inputs().rotor_acceleration);
+  double worst = 0.0, largest = 0.0, worst_height = 0.0;
+  for (int i : flight.row_samples) {
+    // The processed base time is the log's (no jitter here).
+    const Eigen::Vector4d q = sim.states.attitude_wxyz.row(i).transpose();
+    const Eigen::Matrix3d r_wb = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+    const Eigen::Vector3d truth = r_wb.transpose() * sim.states.velocity_w_mps.row(i).transpose();
+    worst = std::max(worst, (flight.velocity_mps->row(i).transpose() - truth).norm());
+    largest = std::max(largest, truth.norm());
+    worst_height = std::max(worst_height, std::abs((*flight.height_m)[i] - sim.states.position_w_m(i, 2)));
+  }
+  EXPECT_GT(largest, 0.3);  // the flight moves
+  EXPECT_LT(worst, 0.02 * largest);
+  EXPECT_LT(worst_height, 0.01);
+}
+
+}  // namespace
+}  // namespace rotorid
