@@ -39,7 +39,11 @@ function(rotorid_add_module name)
 endfunction()
 
 # rotorid_add_test(file.cc): one GoogleTest executable per file, each test registered with CTest.
+# rotorid_add_test(source [WHOLE]): one CTest test per GoogleTest case, or with WHOLE one for the
+# whole executable, for suites whose SetUpTestSuite is the expensive part (simulate, identify,
+# refine, diagnose): per-case processes would repeat it for every case.
 function(rotorid_add_test source)
+  cmake_parse_arguments(ARG "WHOLE" "" "" ${ARGN})
   get_filename_component(name ${source} NAME_WE)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE rotorid::rotorid rotorid_test_support GTest::gtest GTest::gmock GTest::gtest_main)
@@ -48,6 +52,11 @@ function(rotorid_add_test source)
   set_target_properties(${name} PROPERTIES POSITION_INDEPENDENT_CODE OFF)
   target_precompile_headers(${name} REUSE_FROM rotorid_test_support)
   add_dependencies(${name} rotorid_cli)  # end-to-end tests run the CLI binary
+  if(ARG_WHOLE)
+    add_test(NAME ${name} COMMAND ${name})
+    set_tests_properties(${name} PROPERTIES ENVIRONMENT "ROTORID_SOURCE_DIR=${PROJECT_SOURCE_DIR};ROTORID_BINARY=$<TARGET_FILE:rotorid_cli>")
+    return()
+  endif()
   # One variable per property: gtest_discover_tests splits a "A=1;B=2" ENVIRONMENT value into two
   # properties, which left ROTORID_BINARY unset.
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
