@@ -2,10 +2,12 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <mutex>
 
@@ -179,6 +181,58 @@ std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std:
   return names;
 }
 
+// Effect coordinates that the discarded parameters (held at zero by the essential selection) would
+// explain almost entirely: the value found for them rests on those parameters being zero. An IMU
+// lever arm along the thrust axis, say, is exactly the first moment ms_z / m in the force rows, and
+// a multirotor's specific force along z keeps ms_z out of the moment rows. Each entry names the
+// coordinate, the parameter and the share of the coordinate's column that parameter's explains.
+// A share of 0.8 is a variance inflation factor of 5, the usual mark of a harmful collinearity.
+constexpr double kRestingOnDiscardedShare = 0.8;
+struct RestingOnDiscarded {
+  std::string coordinate, parameter;
+  double explained = 0.0;
+};
+std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(ceres::Problem* problem, double* chi_block,
+                                                          const std::vector<double*>& effect_blocks,
+                                                          const IdimSystem& system, const std::vector<int>& fixed,
+                                                          const std::vector<std::string>& effect_labels) {
+  if (fixed.empty() || effect_blocks.empty()) return {};
+  const int p = system.num_parameters();
+  // Every chi column, the fixed ones included: drop the subset manifold for this evaluation.
+  problem->SetManifold(chi_block, nullptr);
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks.push_back(chi_block);
+  for (double* b : effect_blocks) evaluate.parameter_blocks.push_back(b);
+  ceres::CRSMatrix crs;
+  problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
+  problem->SetManifold(chi_block, new ceres::SubsetManifold(p, fixed));
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r)
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jac(r, crs.cols[k]) = crs.values[k];
+  CHECK_EQ(static_cast<Eigen::Index>(p + effect_labels.size()), jac.cols());
+  Eigen::MatrixXd discarded(jac.rows(), static_cast<Eigen::Index>(fixed.size()));
+  for (size_t k = 0; k < fixed.size(); ++k) {
+    const double norm = jac.col(fixed[k]).norm();
+    discarded.col(static_cast<Eigen::Index>(k)) = norm > 0.0 ? Eigen::VectorXd(jac.col(fixed[k]) / norm)
+                                                             : Eigen::VectorXd::Zero(jac.rows());
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(discarded);
+  std::vector<RestingOnDiscarded> found;
+  for (size_t e = 0; e < effect_labels.size(); ++e) {
+    const Eigen::VectorXd column = jac.col(p + static_cast<Eigen::Index>(e));
+    const double norm = column.norm();
+    if (norm == 0.0) continue;
+    const Eigen::VectorXd unit = column / norm;
+    const Eigen::VectorXd coefficients = qr.solve(unit);
+    const double explained = 1.0 - (discarded * coefficients - unit).squaredNorm();
+    if (explained < kRestingOnDiscardedShare) continue;
+    Eigen::Index strongest = 0;
+    coefficients.cwiseAbs().maxCoeff(&strongest);
+    found.push_back({effect_labels[e], system.parameter_names[fixed[static_cast<size_t>(strongest)]], explained});
+  }
+  return found;
+}
+
 // The bounds a refinement keeps an effect in: its physical range, or for a grid-searched effect
 // the search range.
 std::pair<double, double> RefineBounds(EffectKind kind, const RefineOptions& options) {
@@ -290,13 +344,25 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residual_values, nullptr, nullptr);
   const Eigen::VectorXd residuals = Eigen::Map<const Eigen::VectorXd>(residual_values.data(), residual_values.size());
   result.autocorrelation_factor = AutocorrelationFactor(residuals);
+  std::vector<std::string> effect_labels;
+  std::vector<double*> effect_block_pointers;
+  for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
+    const std::vector<std::string> labels = effect_blocks.free[b]->Labels(static_cast<int>(effect_values[b].size()));
+    effect_labels.insert(effect_labels.end(), labels.begin(), labels.end());
+    effect_block_pointers.push_back(effect_values[b].data());
+  }
+  if (!free.empty())
+    for (const RestingOnDiscarded& r :
+         EffectsRestingOnDiscarded(&problem, scaled_chi.data(), effect_block_pointers, system, fixed, effect_labels)) {
+      result.resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
+      char share[32];
+      std::snprintf(share, sizeof share, "%.1f %%", 100.0 * r.explained);
+      result.warnings.push_back(r.coordinate + " is confounded with " + r.parameter +
+                                ", which the essential selection holds at 0 (it explains " + share +
+                                " of its effect on the rows): its value assumes " + r.parameter + " = 0");
+    }
 
   if (options.compute_covariance) {
-    std::vector<std::string> effect_labels;
-    for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
-      const std::vector<std::string> labels = effect_blocks.free[b]->Labels(static_cast<int>(effect_values[b].size()));
-      effect_labels.insert(effect_labels.end(), labels.begin(), labels.end());
-    }
     std::vector<const double*> blocks;
     if (!free.empty()) blocks.push_back(scaled_chi.data());
     for (const Eigen::VectorXd& v : effect_values) blocks.push_back(v.data());

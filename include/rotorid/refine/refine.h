@@ -81,6 +81,9 @@ struct RefineResult {
   // The joint problem was rank-deficient: these parameters and effect coordinates span its null space.
   bool rank_deficient = false;
   std::vector<std::string> confounded;
+  // Effect coordinates that a parameter held at 0 by the essential selection would explain almost
+  // entirely ("imu_position_m_z ~ B.ms_z"): their value assumes that parameter is 0.
+  std::vector<std::string> resting_on_discarded;
   std::vector<std::string> warnings;
 };
 
