@@ -8,7 +8,8 @@
   X(MotorLagEffect)        \
   X(AccBiasEffect)         \
   X(GyroBiasEffect)        \
-  X(MisalignmentEffect)
+  X(MisalignmentEffect)    \
+  X(ImuLeverArmEffect)
 
 namespace rotorid {
 namespace internal {

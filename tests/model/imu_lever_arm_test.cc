@@ -1,29 +1,22 @@
-// The `imu_lever_arm` effect's models: the simulator's accelerometer at r and the model's
-// correction.
+// The `imu_lever_arm` effect: the simulator's accelerometer at r, the model's correction, and a
+// simulated lever arm recovered by the refinement.
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 #include "rotorid/model/effects.h"
+#include "rotorid/refine/refine.h"
+#include "support/test_support.h"
 
 namespace rotorid {
 namespace {
 
 const Eigen::Vector3d kImuPosition(0.022, -0.015, 0.027);  // m, in F_d
 
-}  // namespace
-
-// Not in the registry yet (docs/adding_an_effect.md, "Status"): the test takes the descriptor
-// from its file.
-namespace internal {
-const EffectDescriptor& ImuLeverArmEffect();
-}  // namespace internal
-
-namespace {
-
-const EffectDescriptor& LeverArm() { return internal::ImuLeverArmEffect(); }
+const EffectDescriptor& LeverArm() { return *ParseEffectKind("imu_lever_arm"); }
 
 TEST(ImuLeverArmTest, DescribesItselfWithTheInterfaceNames) {
   EXPECT_EQ(LeverArm().name(), "imu_lever_arm");
@@ -44,6 +37,39 @@ TEST(ImuLeverArmTest, CorrectionUndoesTheSensorModel) {
   EXPECT_EQ(sample.angular_velocity, w);
   LeverArm().CorrectImu(kImuPosition.data(), &sample);
   EXPECT_LT((sample.specific_force - s).norm(), 1e-14);
+}
+
+// A flight controller 20 mm forward, 15 mm to the right and 10 mm above O_d on configuration B,
+// flown for 60 s. The force rows see r only as ms - m r; the moment rows fix ms_x, ms_y (the
+// thrust's lever) but hardly ms_z (the specific force is along z), so r_x and r_y are recovered,
+// and r_z is reported as resting on the first moment the essential selection holds at zero.
+TEST(ImuLeverArmTest, RefinementRecoversASimulatedLeverArm) {
+  const Eigen::Vector3d truth(0.020, -0.015, 0.010);
+  Effects effects;
+  effects.Set("imu_position_m", truth);
+  const SimulationResult sim = testing::SimulatePreset("B", 60.0, 3, effects);
+  const IdentificationResult linear = testing::IdentifySimulated(sim);
+  RefineOptions options;
+  options.effects = {&LeverArm()};
+  const RefineResult refined = Refine(linear, options);
+  ASSERT_TRUE(refined.has_covariance);
+  const Eigen::VectorXd r = refined.effects.Get(&LeverArm());
+  const Eigen::VectorXd std_dev = refined.effects_std.Get(&LeverArm());
+  for (int a = 0; a < 2; ++a) {
+    EXPECT_NEAR(r[a], truth[a], 0.002) << "axis " << a;
+    EXPECT_NEAR(r[a], truth[a], 3 * std_dev[a]) << "axis " << a << ", std " << std_dev[a];
+  }
+  // ms_x and ms_y, fixed by the moment rows, stay at the truth: the lever arm does not trade
+  // against them.
+  const auto named = NamedParameters(linear.system, refined.refined.chi);
+  for (int a = 0; a < 2; ++a) {
+    const std::string name = std::string("B.ms_") + "xy"[a];
+    EXPECT_NEAR(named.at(name), sim.truth.body.first_moment[a], 0.02 * std::abs(sim.truth.body.first_moment[a])) << name;
+  }
+  EXPECT_NE(std::find(refined.resting_on_discarded.begin(), refined.resting_on_discarded.end(),
+                      "imu_position_m_z ~ B.ms_z"),
+            refined.resting_on_discarded.end())
+      << "r_z is a guess resting on ms_z = 0 and must be said to be";
 }
 
 }  // namespace
