@@ -18,7 +18,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
   struct Options {
     FlightOptions flights;
     IdentifyCliOptions identify;
-    std::string effects = "all";
+    std::string effects = "default";
     DiagnosisOptions diagnosis;
   };
   auto options = std::make_shared<Options>();
@@ -30,8 +30,12 @@ Command AddDiagnoseCommand(CLI::App& root) {
   AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
   AddIdentifyOptions(command.app, &options->identify);
   DiagnosisOptions& d = options->diagnosis;
+  std::string names;
+  for (EffectKind kind : AllEffects()) names += (names.empty() ? "" : ",") + kind->name();
+  std::string defaults;
+  for (EffectKind kind : DefaultCandidates()) defaults += (defaults.empty() ? "" : ",") + kind->name();
   command.app->add_option("--effects", options->effects,
-                          "candidate effects: all, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
+                          "candidate effects: default (" + defaults + "), all, or a list of " + names)
       ->capture_default_str();
   command.app->add_option("--folds", d.folds, "time-blocked held-out folds per flight (without --validate-log)")
       ->capture_default_str();

@@ -48,6 +48,9 @@ const EffectDescriptor& ImuLeverArmEffect() {
     i.settle_tolerance = 1e-4;  // 0.1 mm
     i.display_scale = 1e3;
     i.display_unit = "mm";
+    // r_z is ms_z / m in the force rows and ms_z is nearly absent from the moment rows (the specific
+    // force is along z): screened only when named (diagnose --effects ...,imu_lever_arm).
+    i.default_candidate = false;
     return i;
   }());
   return effect;

@@ -168,8 +168,16 @@ EffectKind ParseEffectKind(const std::string& name) {
   throw Error("unknown effect '" + name + "'; known effects: " + valid);
 }
 
+std::vector<EffectKind> DefaultCandidates() {
+  std::vector<EffectKind> kinds;
+  for (EffectKind kind : AllEffects())
+    if (kind->info().default_candidate) kinds.push_back(kind);
+  return kinds;
+}
+
 std::vector<EffectKind> ParseEffectList(const std::string& list) {
   if (list == "all") return AllEffects();
+  if (list == "default") return DefaultCandidates();
   std::vector<EffectKind> kinds;
   if (list.empty() || list == "none") return kinds;
   std::stringstream stream(list);

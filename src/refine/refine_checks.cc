@@ -51,6 +51,12 @@ std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, co
                       label + ": the refined parameters are not jointly identifiable (confounded: " + names +
                           "), so no std is reported; refine fewer effects (rotorid ablate compares subsets)"});
   }
+  for (const std::string& pair : refined.resting_on_discarded)
+    checks.push_back({"refined_identifiable", CheckStatus::kWarning,
+                      label + ": " + pair.substr(0, pair.find(" ~ ")) + " is confounded with " +
+                          pair.substr(pair.find(" ~ ") + 3) +
+                          ", which the essential selection holds at 0: its value assumes that parameter is 0, "
+                          "and its std does not include that assumption"});
   return checks;
 }
 

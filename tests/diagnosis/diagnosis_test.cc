@@ -73,7 +73,7 @@ TEST(DiagnosisTest, WithheldAccBiasIsRankedFirstWithinThreeStd) {
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 23, Effects{})}, {}, TestOptions());
   EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);
-  ASSERT_EQ(d.ranking.size(), static_cast<size_t>(static_cast<int>(AllEffects().size())));
+  ASSERT_EQ(d.ranking.size(), DefaultCandidates().size());
   for (const EffectVerdict& v : d.ranking) {
     EXPECT_FALSE(v.significant) << EffectName(v.kind);
     EXPECT_EQ(v.status, "not significant") << EffectName(v.kind);
@@ -94,7 +94,7 @@ TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   EXPECT_TRUE(j["baseline"]["relative_error_pct"]["Fx"].is_null());
   EXPECT_TRUE(j["where"]["component"].is_string());
   EXPECT_TRUE(j["selected"].is_array() && j["selected"].empty());
-  EXPECT_EQ(j["ranking"].size(), static_cast<size_t>(static_cast<int>(AllEffects().size())));
+  EXPECT_EQ(j["ranking"].size(), DefaultCandidates().size());
 }
 
 TEST(DiagnosisTest, HeldOutFlightsReplaceFoldsAndFindMisalignment) {

@@ -34,7 +34,7 @@ struct DiagnosisOptions {
   // Signal processing and TLS of the linear model (the baseline).
   IdentifyOptions identify;
   // Effects considered as causes of the gap.
-  std::vector<EffectKind> candidates = AllEffects();
+  std::vector<EffectKind> candidates = DefaultCandidates();
   // Time-blocked folds per flight when no held-out flights are given.
   int folds = 4;
   // Rows within this many seconds of a held-out block are left out of its training data, so that
