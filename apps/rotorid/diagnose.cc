@@ -18,7 +18,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
   struct Options {
     FlightOptions flights;
     IdentifyCliOptions identify;
-    std::string effects = "default";
+    std::string effects = "all";
     DiagnosisOptions diagnosis;
   };
   auto options = std::make_shared<Options>();
@@ -32,10 +32,10 @@ Command AddDiagnoseCommand(CLI::App& root) {
   DiagnosisOptions& d = options->diagnosis;
   std::string names;
   for (EffectKind kind : AllEffects()) names += (names.empty() ? "" : ",") + kind->name();
-  std::string defaults;
-  for (EffectKind kind : DefaultCandidates()) defaults += (defaults.empty() ? "" : ",") + kind->name();
+  std::string in_all;
+  for (EffectKind kind : DefaultCandidates()) in_all += (in_all.empty() ? "" : ",") + kind->name();
   command.app->add_option("--effects", options->effects,
-                          "candidate effects: default (" + defaults + "), all, or a list of " + names)
+                          "candidate effects: all (" + in_all + ") or a list of " + names)
       ->capture_default_str();
   command.app->add_option("--folds", d.folds, "time-blocked held-out folds per flight (without --validate-log)")
       ->capture_default_str();

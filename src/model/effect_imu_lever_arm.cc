@@ -49,7 +49,7 @@ const EffectDescriptor& ImuLeverArmEffect() {
     i.display_scale = 1e3;
     i.display_unit = "mm";
     // r_z is ms_z / m in the force rows and ms_z is nearly absent from the moment rows (the specific
-    // force is along z): screened only when named (diagnose --effects ...,imu_lever_arm).
+    // force is along z): refined and screened only when named (--effects ...,imu_lever_arm).
     i.default_candidate = false;
     return i;
   }());

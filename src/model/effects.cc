@@ -176,8 +176,7 @@ std::vector<EffectKind> DefaultCandidates() {
 }
 
 std::vector<EffectKind> ParseEffectList(const std::string& list) {
-  if (list == "all") return AllEffects();
-  if (list == "default") return DefaultCandidates();
+  if (list == "all") return DefaultCandidates();
   std::vector<EffectKind> kinds;
   if (list.empty() || list == "none") return kinds;
   std::stringstream stream(list);

@@ -42,7 +42,7 @@ TEST(DiagnoseCliTest, WithheldDelayThroughTheCommandLine) {
   const std::string component = report["where"]["component"];
   EXPECT_TRUE(component == "Fz" || component == "Mx" || component == "My") << component;
   ASSERT_TRUE(report["ranking"].is_array());
-  ASSERT_EQ(report["ranking"].size(), DefaultCandidates().size());  // every default candidate is ranked
+  ASSERT_EQ(report["ranking"].size(), DefaultCandidates().size());  // every effect of "all" is ranked
   for (const nlohmann::json& entry : report["ranking"]) {
     for (const char* key : {"effect", "significant", "shrink_pct", "magnitude"})
       EXPECT_TRUE(entry.contains(key)) << key;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 
 #include "rotorid/core/error.h"
@@ -29,7 +30,12 @@ TEST(EffectRegistryTest, NamesAreUniqueAndParseInEitherForm) {
     EXPECT_LT(kind->info().lower_bound, kind->info().upper_bound) << kind->name();
     EXPECT_GT(kind->info().settle_tolerance, 0.0) << kind->name();
   }
-  EXPECT_EQ(ParseEffectList("all"), AllEffects());
+  EXPECT_EQ(ParseEffectList("all"), DefaultCandidates());
+  // An effect left out of "all" is taken when named.
+  const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
+  const std::vector<EffectKind> in_all = DefaultCandidates();
+  EXPECT_EQ(std::count(in_all.begin(), in_all.end(), lever_arm), 0);
+  EXPECT_EQ(ParseEffectList("delay,imu_lever_arm").back(), lever_arm);
   EXPECT_THROW(ParseEffectKind("wind"), Error);
 }
 

@@ -113,9 +113,9 @@ class EffectDescriptor {
     std::string display_unit;
     // The flight signals its model needs (beyond gyro, accelerometer, rotor signal).
     std::vector<FlightInput> inputs;
-    // Whether the diagnosis screens it unless asked for other candidates: false for an effect that
-    // a parameter of the linear model can mimic so closely that, on ordinary flights, it would run
-    // to its bound rather than measure itself (the diagnosis takes it when it is named).
+    // Whether "all" (refine's and ablate's default, the diagnosis's candidates) includes it: false
+    // for an effect that a parameter of the linear model mimics so closely that, on ordinary
+    // flights, it runs to its bound or takes that parameter's value (used when named).
     bool default_candidate = true;
   };
 
@@ -181,7 +181,7 @@ struct EffectOrder {
 
 // Every registered effect, in report order.
 const std::vector<EffectKind>& AllEffects();
-// Registered effects the diagnosis screens by default (EffectDescriptor::Info::default_candidate).
+// Registered effects that "all" stands for (EffectDescriptor::Info::default_candidate).
 std::vector<EffectKind> DefaultCandidates();
 // Registered effects acting on `stage`, in chain order.
 std::vector<EffectKind> EffectsOfStage(EffectStage stage);
@@ -192,8 +192,8 @@ inline const char* EffectParameterName(EffectKind kind) { return kind->parameter
 int EffectDimension(EffectKind kind);
 // Parses an effect name (either form above); throws rotorid::Error listing the valid names.
 EffectKind ParseEffectKind(const std::string& name);
-// Parses "a,b,c" effect lists ("all" for every effect, "default" for DefaultCandidates()); throws
-// rotorid::Error on unknown names.
+// Parses "a,b,c" effect lists ("all" for DefaultCandidates()); throws rotorid::Error on unknown
+// names.
 std::vector<EffectKind> ParseEffectList(const std::string& list);
 
 // The value of a double or of a ceres::Jet (its .a), for decisions that carry no derivative.
