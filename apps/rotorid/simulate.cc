@@ -114,7 +114,7 @@ Command AddSimulateCommand(CLI::App& root) {
   app->add_option("--warmup-s", args->options.warmup_s,
                   "unlogged flight before t = 0 so that the controller has settled, in s (default 1)");
   app->add_option("--gravity", args->options.gravity_mps2, "g in m/s^2 (default 9.80665)");
-  app->add_flag("--quiet", args->quiet, "print nothing on success");
+  app->add_flag("--quiet,-q", args->quiet, "print nothing on success");
   command.run = [app, args]() { return RunSimulate(*app, *args); };
   return command;
 }

@@ -77,6 +77,10 @@ TEST_F(CliWorkflowTest, LibraryLogLinesOnlyUnderVerbose) {
   ASSERT_EQ(quiet.exit_code, 0) << quiet.err;
   EXPECT_EQ(quiet.err, "");
   EXPECT_EQ(quiet.out, "");
+  // simulate takes -q like the other commands.
+  const auto quiet_simulate = RunRotorid({"simulate", "--preset", "A", "--seconds", "3", "--out", Path("q.csv"), "-q"});
+  ASSERT_EQ(quiet_simulate.exit_code, 0) << quiet_simulate.err;
+  EXPECT_EQ(quiet_simulate.out + quiet_simulate.err, "");
   const auto normal = RunRotorid(Args({"refine", "--effects", "delay,motor_lag"}));
   ASSERT_EQ(normal.exit_code, 0) << normal.err;
   // glog lines start with a severity letter and the date, e.g. "W1201 20:04:09.123 ...".
