@@ -74,6 +74,16 @@ struct ModelRecord {
   HeldOutGap gap;
 };
 
+// Held-out shrinks closer than this fraction of the larger one are the same fit in practice.
+constexpr double kPracticalEquivalence = 0.1;
+
+std::string FormatScalarEffect(EffectKind kind, double value) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << value * kind->info().display_scale << " "
+      << (kind->info().display_unit.empty() ? kind->info().unit : kind->info().display_unit);
+  return out.str();
+}
+
 // The work shared by all steps: folds, their linear fits, and the refinement settings.
 class HeldOutEvaluator {
  public:
@@ -192,6 +202,15 @@ Eigen::VectorXd MeanFoldEffect(const ModelRecord& record, EffectKind kind) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(EffectDimension(kind));
   for (const Effects& e : record.fold_effects) sum += e.Get(kind);
   return record.fold_effects.empty() ? sum : Eigen::VectorXd(sum / static_cast<double>(record.fold_effects.size()));
+}
+
+// "; alone, motor_lag = 25.1 ms and delay = 24.6 ms fit as well" for two scalar effects (a delay
+// and a lag, say): what the data do fix is what the two values share. Empty otherwise.
+std::string AloneValues(EffectKind a, const ModelRecord& with_a, EffectKind b, const ModelRecord& with_b) {
+  if (EffectDimension(a) != 1 || EffectDimension(b) != 1) return "";
+  return "; alone, " + std::string(EffectName(a)) + " = " + FormatScalarEffect(a, MeanFoldEffect(with_a, a)[0]) +
+         " and " + EffectName(b) + " = " + FormatScalarEffect(b, MeanFoldEffect(with_b, b)[0]) +
+         " fit as well: the data fix what the two share, not which of them it is";
 }
 
 Effects MeanFoldEffects(const ModelRecord& record) {
@@ -683,7 +702,11 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
           records.at(before | Bit(step.added)).held_out, records.at(before | Bit(other)).held_out, evaluator.scales());
       c.t_statistic = comparison.t_statistic;
       c.p_value = comparison.p_value;
-      c.distinguishable = comparison.p_value < options.alpha;
+      // Practical equivalence (issue 11): a significant t on two held-out shrinks that are almost
+      // equal says the better one is better by a hair, not that the data tell them apart.
+      const bool practically_equal = std::abs(c.selected_shrink_pct - c.other_shrink_pct) <
+                                     kPracticalEquivalence * std::max(c.selected_shrink_pct, c.other_shrink_pct);
+      c.distinguishable = comparison.p_value < options.alpha && !practically_equal;
       // Their correlation, from the criterion linearised at the final model with both in it (the
       // refinement's Ceres covariance drops weak directions, see linearization.h).
       std::vector<EffectKind> pair = selected_kinds;
@@ -705,9 +728,18 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
         note << "; " << EffectName(step.added)
              << " fits the held-out rows significantly better (t = " << std::setprecision(1) << c.t_statistic
              << "): the data tell them apart";
+      else if (practically_equal)
+        note << "; they differ by less than " << std::setprecision(0) << 100 * kPracticalEquivalence
+             << " % of that (t = " << std::setprecision(1) << c.t_statistic
+             << " measures a hair, not a difference): these flights cannot tell " << EffectName(step.added)
+             << " and " << EffectName(other) << " apart"
+             << AloneValues(step.added, records.at(before | Bit(step.added)), other,
+                            records.at(before | Bit(other)));
       else
         note << "; the difference is not significant (t = " << std::setprecision(1) << c.t_statistic
-             << "): these flights cannot tell " << EffectName(step.added) << " and " << EffectName(other) << " apart";
+             << "): these flights cannot tell " << EffectName(step.added) << " and " << EffectName(other) << " apart"
+             << AloneValues(step.added, records.at(before | Bit(step.added)), other,
+                            records.at(before | Bit(other)));
       c.note = note.str();
       EffectVerdict& verdict = verdict_of(other);
       verdict.confounded_with.push_back(step.added);
