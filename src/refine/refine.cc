@@ -351,7 +351,8 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
     effect_labels.insert(effect_labels.end(), labels.begin(), labels.end());
     effect_block_pointers.push_back(effect_values[b].data());
   }
-  if (!free.empty())
+  // A report for people: fits that skip the covariance (diagnosis folds, ablation) skip it too.
+  if (!free.empty() && options.compute_covariance)
     for (const RestingOnDiscarded& r :
          EffectsRestingOnDiscarded(&problem, scaled_chi.data(), effect_block_pointers, system, fixed, effect_labels)) {
       result.resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
