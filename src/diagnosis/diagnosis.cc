@@ -77,13 +77,6 @@ struct ModelRecord {
 // Held-out shrinks closer than this fraction of the larger one are the same fit in practice.
 constexpr double kPracticalEquivalence = 0.1;
 
-std::string FormatScalarEffect(EffectKind kind, double value) {
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(1) << value * kind->info().display_scale << " "
-      << (kind->info().display_unit.empty() ? kind->info().unit : kind->info().display_unit);
-  return out.str();
-}
-
 // The work shared by all steps: folds, their linear fits, and the refinement settings.
 class HeldOutEvaluator {
  public:
@@ -208,8 +201,8 @@ Eigen::VectorXd MeanFoldEffect(const ModelRecord& record, EffectKind kind) {
 // and a lag, say): what the data do fix is what the two values share. Empty otherwise.
 std::string AloneValues(EffectKind a, const ModelRecord& with_a, EffectKind b, const ModelRecord& with_b) {
   if (EffectDimension(a) != 1 || EffectDimension(b) != 1) return "";
-  return "; alone, " + std::string(EffectName(a)) + " = " + FormatScalarEffect(a, MeanFoldEffect(with_a, a)[0]) +
-         " and " + EffectName(b) + " = " + FormatScalarEffect(b, MeanFoldEffect(with_b, b)[0]) +
+  return "; alone, " + std::string(EffectName(a)) + " = " + a->Format(MeanFoldEffect(with_a, a), {}) + " and " +
+         EffectName(b) + " = " + b->Format(MeanFoldEffect(with_b, b), {}) +
          " fit as well: the data fix what the two share, not which of them it is";
 }
 

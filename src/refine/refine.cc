@@ -148,21 +148,27 @@ double AutocorrelationFactor(const Eigen::VectorXd& residuals) {
 
 namespace {
 
+// The problem's Jacobian with respect to `blocks`, dense. Ceres returns it in tangent coordinates
+// (chi's SubsetManifold drops the fixed entries), so a block with a manifold has its tangent size
+// in columns.
+Eigen::MatrixXd DenseJacobian(ceres::Problem* problem, const std::vector<const double*>& blocks) {
+  ceres::Problem::EvaluateOptions evaluate;
+  for (const double* b : blocks) evaluate.parameter_blocks.push_back(const_cast<double*>(b));
+  ceres::CRSMatrix crs;
+  problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r)
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jac(r, crs.cols[k]) = crs.values[k];
+  return jac;
+}
+
 // The parameters taking part in the (numerical) null space of the Jacobian, in tangent
 // coordinates with equilibrated columns: what the flights cannot tell apart.
 std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std::vector<const double*>& blocks,
                                              const IdimSystem& system, const std::vector<int>& free,
                                              const std::vector<std::string>& effect_labels) {
-  ceres::Problem::EvaluateOptions evaluate;
-  for (const double* b : blocks) evaluate.parameter_blocks.push_back(const_cast<double*>(b));
-  ceres::CRSMatrix crs;
-  // Ceres returns the Jacobian in tangent coordinates already (chi's SubsetManifold drops the
-  // fixed entries, the quaternion's tangent is 3-d); a column scaling makes the SVD see
-  // directions, not units.
-  problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
-  Eigen::MatrixXd tangent_jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r)
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) tangent_jac(r, crs.cols[k]) = crs.values[k];
+  // A column scaling makes the SVD see directions, not units.
+  const Eigen::MatrixXd tangent_jac = DenseJacobian(problem, blocks);
   std::vector<std::string> labels;
   for (int k : free) labels.push_back(system.parameter_names[k]);
   labels.insert(labels.end(), effect_labels.begin(), effect_labels.end());
@@ -199,16 +205,11 @@ std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(ceres::Problem* proble
   if (fixed.empty() || effect_blocks.empty()) return {};
   const int p = system.num_parameters();
   // Every chi column, the fixed ones included: drop the subset manifold for this evaluation.
+  std::vector<const double*> blocks = {chi_block};
+  blocks.insert(blocks.end(), effect_blocks.begin(), effect_blocks.end());
   problem->SetManifold(chi_block, nullptr);
-  ceres::Problem::EvaluateOptions evaluate;
-  evaluate.parameter_blocks.push_back(chi_block);
-  for (double* b : effect_blocks) evaluate.parameter_blocks.push_back(b);
-  ceres::CRSMatrix crs;
-  problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
+  const Eigen::MatrixXd jac = DenseJacobian(problem, blocks);
   problem->SetManifold(chi_block, new ceres::SubsetManifold(p, fixed));
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r)
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jac(r, crs.cols[k]) = crs.values[k];
   CHECK_EQ(static_cast<Eigen::Index>(p + effect_labels.size()), jac.cols());
   Eigen::MatrixXd discarded(jac.rows(), static_cast<Eigen::Index>(fixed.size()));
   for (size_t k = 0; k < fixed.size(); ++k) {
@@ -418,7 +419,6 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   return result;
 }
 
-// Warnings for estimates that ended on a (non-zero) bound of their range: not estimates.
 // The enabled effects whose estimate ended on a non-zero bound of their physical range.
 std::vector<EffectKind> EffectsOnBound(const RefineResult& result, const RefineOptions& options) {
   std::vector<EffectKind> bounded;
