@@ -54,17 +54,18 @@ Command AddAblateCommand(CLI::App& root) {
                 "held-out flights), parameter counts, information criteria and key parameters");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
   AddIdentifyOptions(command.app, &options->identify);
-  command.app->add_option("--effects", options->effects, "effects to combine (default all five: 32 subsets)")
+  command.app->add_option("--effects", options->effects, "effects to combine (default all: 2^n subsets of the default effects the flights can carry)")
       ->capture_default_str();
   command.app->add_option("--threads", options->threads, "subsets refined in parallel")->capture_default_str();
   command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
-    const std::vector<EffectKind> effects = ParseEffectList(options->effects);
+    ParseEffectList(options->effects);  // a misspelt name fails before the flights are read
     const FlightSourceOptions source = SourceOptions(options->identify);
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
     std::vector<Check> checks;
     const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
+    const std::vector<EffectKind> effects = EffectsForFlights(options->effects, linear, options->flights.quiet);
     std::vector<ProcessedFlight> held_out;
     if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, identify.observation);
     Progress progress("ablate", int64_t{1} << effects.size(), options->flights.quiet);

@@ -71,6 +71,10 @@ struct LoadedFlights {
 // naming the file at fault (UsageError for unpaired options).
 LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
 LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source);
+// The effects an --effects value names. "all" leaves out the effects whose inputs a training flight
+// lacks (rotor_drag without a velocity, say), with a note on stderr unless quiet; an effect named
+// explicitly is kept, and the refinement refuses it with the reason.
+std::vector<EffectKind> EffectsForFlights(const std::string& list, const IdentificationResult& linear, bool quiet);
 
 // Sections every report carries whatever the command: input.flights[] (and
 // input.validate_flights[]), and the --config file's options when one was given. Plausibility

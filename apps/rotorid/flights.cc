@@ -139,6 +139,23 @@ LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSour
                      source);
 }
 
+std::vector<EffectKind> EffectsForFlights(const std::string& list, const IdentificationResult& linear, bool quiet) {
+  const std::vector<EffectKind> named = ParseEffectList(list);
+  if (list != "all") return named;
+  std::vector<EffectKind> kept;
+  for (EffectKind kind : named) {
+    std::string why;
+    for (const ProcessedFlight& flight : linear.flights)
+      if (why.empty()) why = kind->Unavailable(flight.inputs());
+    if (why.empty()) {
+      kept.push_back(kind);
+    } else if (!quiet) {
+      std::cerr << "rotorid: note: " << why << "; left out of \"all\"\n";
+    }
+  }
+  return kept;
+}
+
 LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source) {
   return LoadFlights(options.validate_vehicle_paths, options.validate_log_paths, {}, options.validate_windows,
                      "--validate-log", options, source);

@@ -47,15 +47,8 @@ void PrintEffects(const RefineResult& refined) {
   std::cout << "effects (value +- std):\n";
   for (EffectKind kind : AllEffects()) {
     const bool on = std::find(refined.enabled.begin(), refined.enabled.end(), kind) != refined.enabled.end();
-    const Eigen::VectorXd v = refined.effects.Get(kind), s = refined.effects_std.Get(kind);
-    std::cout << "  " << std::left << std::setw(18) << EffectParameterName(kind) << std::right;
-    if (!on) {
-      std::cout << "off\n";
-      continue;
-    }
-    for (int k = 0; k < v.size(); ++k)
-      std::cout << (k ? ", " : "") << std::setprecision(4) << v[k] << " +- " << std::setprecision(2) << s[k];
-    std::cout << "\n";
+    std::cout << "  " << std::left << std::setw(27) << EffectParameterName(kind) << std::right << " "
+              << (on ? kind->Format(refined.effects.Get(kind), refined.effects_std.Get(kind)) : "off") << "\n";
   }
 }
 
@@ -102,6 +95,7 @@ Command AddRefineCommand(CLI::App& root) {
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
     std::vector<Check> checks;
     const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
+    refine.effects = EffectsForFlights(options->effects, linear, options->flights.quiet);
     Progress progress("refine: Ceres", 0, options->flights.quiet);
     progress.StartTicking();
     const RefineResult refined = Refine(linear, refine);

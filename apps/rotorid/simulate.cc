@@ -109,6 +109,8 @@ Command AddSimulateCommand(CLI::App& root) {
   app->add_flag("--mocap", args->options.mocap, "also log motion capture: pos_x,pos_y,pos_z,roll,pitch,yaw");
   app->add_option("--jitter-s", args->options.jitter_s, "standard deviation of the sampling instants in s (default 0)");
   app->add_option("--excitation", args->options.excitation, "scale of the pilot's references, 0 = hover (default 1)");
+  app->add_option("--hover-altitude", args->options.hover_altitude_m,
+                  "height above the ground (z = 0) the pilot hovers about, in m (default 1.5; low for ground_effect)");
   app->add_option("--hover-lead-in-s", args->options.hover_lead_in_s,
                   "logged hover before the pilot's references fade in, in s (default 1)");
   app->add_option("--warmup-s", args->options.warmup_s,

@@ -192,15 +192,15 @@ class HeldOutEvaluator {
 };
 
 Eigen::VectorXd MeanFoldEffect(const ModelRecord& record, EffectKind kind) {
-  Eigen::VectorXd sum = Eigen::VectorXd::Zero(EffectDimension(kind));
-  for (const Effects& e : record.fold_effects) sum += e.Get(kind);
+  Eigen::VectorXd sum;
+  for (const Effects& e : record.fold_effects) sum = sum.size() ? Eigen::VectorXd(sum + e.Get(kind)) : e.Get(kind);
   return record.fold_effects.empty() ? sum : Eigen::VectorXd(sum / static_cast<double>(record.fold_effects.size()));
 }
 
 // "; alone, motor_lag = 25.1 ms and delay = 24.6 ms fit as well" for two scalar effects (a delay
 // and a lag, say): what the data do fix is what the two values share. Empty otherwise.
 std::string AloneValues(EffectKind a, const ModelRecord& with_a, EffectKind b, const ModelRecord& with_b) {
-  if (EffectDimension(a) != 1 || EffectDimension(b) != 1) return "";
+  if (a->FixedDimension() != 1 || b->FixedDimension() != 1) return "";
   return "; alone, " + std::string(EffectName(a)) + " = " + a->Format(MeanFoldEffect(with_a, a), {}) + " and " +
          EffectName(b) + " = " + b->Format(MeanFoldEffect(with_b, b), {}) +
          " fit as well: the data fix what the two share, not which of them it is";
@@ -264,10 +264,11 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
                    const DiagnosisOptions& requested, const DiagnosisProgress& progress) {
   if (const std::string problem = requested.Validate(); !problem.empty()) throw Error(problem);
   if (flights.empty()) throw Error("diagnose: no identification flights");
+  const auto dimension = [&flights](EffectKind kind) { return kind->Dimension(flights.front().vehicle); };
   // A candidate whose inputs a log lacks (velocity, voltage, ...) is unavailable for these logs.
   DiagnosisOptions options = requested;
   options.candidates.clear();
-  std::vector<std::string> unavailable;
+  std::vector<EffectVerdict> unavailable;  // ranked last, with the reason
   for (EffectKind kind : requested.candidates) {
     std::string reason;
     for (size_t f = 0; f < flights.size() && reason.empty(); ++f)
@@ -276,7 +277,12 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     if (reason.empty()) {
       options.candidates.push_back(kind);
     } else {
-      unavailable.push_back(reason);
+      EffectVerdict v;
+      v.kind = kind;
+      v.status = "unavailable";
+      v.value = Eigen::VectorXd::Zero(dimension(kind));
+      v.note = reason;
+      unavailable.push_back(v);
     }
   }
   const auto start_time = std::chrono::steady_clock::now();
@@ -292,7 +298,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   // Baseline: the linear model on all identification data.
   const IdentificationResult full = IdentifyProcessed(flights, options.identify);
   diagnosis.warnings = full.warnings;
-  diagnosis.warnings.insert(diagnosis.warnings.end(), unavailable.begin(), unavailable.end());
+  for (const EffectVerdict& v : unavailable) diagnosis.warnings.push_back(v.note);
   diagnosis.linear_parameters = NamedParameters(full.system, full.solution.chi);
   mark("linear identification");
 
@@ -364,8 +370,8 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     mark("coarse delay search");
   };
 
-  auto columns_of = [](const internal::EffectSubsetFit& fit, EffectKind kind, const Eigen::VectorXd& v) {
-    Eigen::VectorXd out(EffectDimension(kind));
+  auto columns_of = [&dimension](const internal::EffectSubsetFit& fit, EffectKind kind, const Eigen::VectorXd& v) {
+    Eigen::VectorXd out(dimension(kind));
     int k = 0;
     for (size_t c = 0; c < fit.column_kind.size(); ++c)
       if (fit.column_kind[c] == kind) out[k++] = v[static_cast<Eigen::Index>(c)];
@@ -433,7 +439,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       // screening of such effects also takes the best in-sample shrink over a coarse grid.
       if (!ScreeningGrid(kind, options).empty())
         predicted = std::max(predicted, GridShrinkPct(full, point_effects, kind, options));
-      t.screening = internal::ScreeningTest(predicted, EffectDimension(kind), fit.effective_samples,
+      t.screening = internal::ScreeningTest(predicted, dimension(kind), fit.effective_samples,
                                             linearization.scored_rows, options.alpha, options.min_shrink_pct);
       t.test = t.screening;
       if (step == 1) t.alone = t.test;
@@ -486,7 +492,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
         continue;
       }
       Tested& t = tested[to_fit[c]];
-      t.test = internal::TestAddedEffects(base.gap, record.gap, EffectDimension(to_fit[c]), options.alpha,
+      t.test = internal::TestAddedEffects(base.gap, record.gap, dimension(to_fit[c]), options.alpha,
                                           options.min_shrink_pct);
       if (step == 1) t.alone = t.test;
       step_fitted.back().push_back(to_fit[c]);
@@ -553,7 +559,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       ensure_fitted({others}, selected);
       if (!records.count(others)) continue;
       const EffectTest test = internal::TestAddedEffects(records.at(others).gap, records.at(selected).gap,
-                                                         EffectDimension(kind), options.alpha, options.min_shrink_pct);
+                                                         dimension(kind), options.alpha, options.min_shrink_pct);
       if (test.significant) continue;
       dropped.push_back({kind, others, test});
       selected = others;
@@ -579,7 +585,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       if (!records.count(prefix)) break;
       s.after = records.at(prefix).gap;
       s.test =
-          internal::TestAddedEffects(s.before, s.after, EffectDimension(kind), options.alpha, options.min_shrink_pct);
+          internal::TestAddedEffects(s.before, s.after, dimension(kind), options.alpha, options.min_shrink_pct);
       diagnosis.steps.push_back(s);
     }
   }
@@ -630,7 +636,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     if (!v.selected) subset.push_back(kind);
     const internal::EffectSubsetFit fit = v.selected ? selected_fit : internal::FitEffectSubset(linearization, subset);
     v.std = columns_of(fit, kind, fit.std);
-    v.detectable_above = DetectableSizes(v.std, EffectDimension(kind), fit.effective_samples, options);
+    v.detectable_above = DetectableSizes(v.std, dimension(kind), fit.effective_samples, options);
     if (v.selected) {
       v.value = diagnosis.final_effects.Get(kind);
       v.status = "selected";
@@ -640,7 +646,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
       else if (t != tested.end())
         v.value = t->second.linearized_value;
       else
-        v.value = Eigen::VectorXd::Zero(EffectDimension(kind));
+        v.value = Eigen::VectorXd::Zero(dimension(kind));
       v.status = "not significant";
     }
     // Kept effects: their test on top of the kept effects added before them.
@@ -778,6 +784,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     return a.test.shrink_pct > b.test.shrink_pct;
   });
   diagnosis.ranking.insert(diagnosis.ranking.end(), rest.begin(), rest.end());
+  diagnosis.ranking.insert(diagnosis.ranking.end(), unavailable.begin(), unavailable.end());
 
   // Where.
   // The component with the largest model error (gap beyond the noise floor) among those whose gap is

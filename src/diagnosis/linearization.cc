@@ -70,7 +70,9 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
   return out;
 }
 
-std::vector<std::string> EffectLabels(EffectKind kind) { return kind->Labels(EffectDimension(kind)); }
+std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle) {
+  return kind->Labels(kind->Dimension(vehicle));
+}
 
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
@@ -79,7 +81,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   EffectLinearization out;
   out.kinds = kinds;
   for (size_t k = 0; k < kinds.size(); ++k)
-    for (const std::string& label : EffectLabels(kinds[k])) {
+    for (const std::string& label : EffectLabels(kinds[k], flights.front().vehicle)) {
       out.labels.push_back(label);
       out.column_kind.push_back(static_cast<int>(k));
     }

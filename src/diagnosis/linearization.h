@@ -30,8 +30,9 @@ struct FlightResidual {
 FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
                           const Effects& effects);
 
-// Labels of an effect's scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.
-std::vector<std::string> EffectLabels(EffectKind kind);
+// Labels of an effect's scalar parameters for this vehicle: {"delay_s"} or {"acc_bias_x", "acc_bias_y",
+// "acc_bias_z"}.
+std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle);
 
 struct EffectLinearization {
   std::vector<EffectKind> kinds;       // effect blocks in column order

@@ -23,6 +23,20 @@ std::string ObservationOptions::Validate() const {
 
 namespace {
 
+// The ground's z in the motion-capture frame: the log's `# ground_z:` metadata, else the lowest z of
+// O_d in the log (a flight that starts or ends on the ground).
+double GroundZ(const FlightLog& log, const Eigen::Ref<const Eigen::VectorXd>& z) {
+  const auto it = log.metadata.find("ground_z");
+  if (it == log.metadata.end()) return z.minCoeff();
+  try {
+    size_t used = 0;
+    const double value = std::stod(it->second, &used);
+    if (used == it->second.size() && std::isfinite(value)) return value;
+  } catch (const std::exception&) {
+  }
+  throw Error(log.source + ": metadata 'ground_z' must be a number (m), got '" + it->second + "'");
+}
+
 // Variance gain of white noise through filtfilt (|H|^2 applied twice) and, optionally, the
 // fourth-order central difference (per application): (2/fs) * integral over [0, fs/2].
 double NoiseVarianceGain(const SosFilter& filter, double fs, int differentiations) {
@@ -137,7 +151,14 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     for (int i = 0; i < n; ++i)
       out.velocity_mps->row(i) =
           (BryantToRotation(eta.row(i).transpose()).transpose() * velocity_w.row(i).transpose()).transpose();
-    out.height_m = position.col(2);
+    const double ground_z = GroundZ(log, position.col(2));
+    out.height_m = position.col(2).array() - ground_z;
+    out.rotor_height_m = Eigen::MatrixXd(n, vehicle.num_rotors());
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Matrix3d r_wb = BryantToRotation(eta.row(i).transpose());
+      for (int k = 0; k < vehicle.num_rotors(); ++k)
+        (*out.rotor_height_m)(i, k) = (*out.height_m)[i] + r_wb.row(2).dot(vehicle.rotors[k].position_m);
+    }
   }
   if (options.source == DataSource::kImu) {
     const Eigen::MatrixXd gyro = InterpolateLinear(log.t_s, log.gyro_radps, out.t_s);
@@ -176,6 +197,8 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     out.noise.angular_velocity = angle_noise * gain1;
     out.noise.angular_acceleration = angle_noise * gain2;
   }
+  out.specific_force_rate = FourthOrderCentralDifference(out.specific_force, dt);
+  out.specific_force_rate2 = FourthOrderCentralDifference(out.specific_force_rate, dt);
   for (int i = trim; i < n - trim; i += step) out.row_samples.push_back(i);
   return out;
 }
@@ -183,7 +206,8 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
 FlightInputs ProcessedFlight::inputs() const {
   FlightInputs available;
   available.velocity = velocity_mps.has_value();
-  available.height = height_m.has_value();
+  available.height = height_m.has_value() && rotor_height_m.has_value();
+  available.rotor_radius = vehicle.rotor_radius_m.has_value();
   available.voltage = voltage_v.has_value();
   available.rotor_acceleration = rotor_acceleration.rows() == rotor.rows() && rotor.rows() > 0;
   available.rotor_command = rotor_command.has_value();

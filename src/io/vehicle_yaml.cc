@@ -57,6 +57,11 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
       internal::FailAt(source, map, problem);
     vehicle.command_to_speed = command_to_speed;
   }
+  if (const YAML::Node radius = root["rotor_radius"]) {
+    vehicle.rotor_radius_m = internal::ReadYamlNumber(source, radius, "rotor_radius");
+    if (!(*vehicle.rotor_radius_m > 0.0) || *vehicle.rotor_radius_m > 2.0)
+      internal::FailAt(source, radius, "rotor_radius must be a propeller radius in m, in (0, 2]");
+  }
   if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error(source + ": " + problem);
   return vehicle;
 }
@@ -81,6 +86,7 @@ std::string VehicleToYaml(const Vehicle& vehicle) {
     const Eigen::Vector3d& c = vehicle.command_to_speed->coefficients;
     out << "command_to_speed: [" << c[0] << ", " << c[1] << ", " << c[2] << "]  # Omega = c0 + c1 u + c2 u^2 (rad/s)\n";
   }
+  if (vehicle.rotor_radius_m) out << "rotor_radius: " << *vehicle.rotor_radius_m << "  # m\n";
   return out.str();
 }
 

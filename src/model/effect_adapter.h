@@ -16,10 +16,27 @@
 
 namespace rotorid::internal {
 
+//   and optionally  static double AccelerometerDelay(const Eigen::VectorXd& v);  // series shift
+template <class Model>
+constexpr auto HasAccelerometerDelay(int) -> decltype(Model::AccelerometerDelay(Eigen::VectorXd()), bool()) {
+  return true;
+}
+template <class Model>
+constexpr bool HasAccelerometerDelay(long) {
+  return false;
+}
+
 template <class Model>
 class ImuEffect final : public EffectDescriptor {
  public:
   explicit ImuEffect(Info info) : EffectDescriptor(std::move(info)) {}
+  double SimulatedAccelerometerDelay(const Eigen::VectorXd& v) const override {
+    if constexpr (HasAccelerometerDelay<Model>(0)) {
+      return Model::AccelerometerDelay(v);
+    } else {
+      return 0.0;
+    }
+  }
   void CorrectImu(const double* p, ImuSample<double>* s) const override { Model::Correct(p, s); }
   void CorrectImu(const ImuJet* p, ImuSample<ImuJet>* s) const override { Model::Correct(p, s); }
   void CorrectImu(const WideImuJet* p, ImuSample<WideImuJet>* s) const override { Model::Correct(p, s); }
@@ -48,6 +65,26 @@ class RotorSignalEffect final : public EffectDescriptor {
   double SimulatedMotorTimeConstant(const Eigen::VectorXd& v) const override { return Model::MotorTimeConstant(v); }
   Eigen::VectorXd FromEquivalentDelay(double delay_s) const override {
     return Clamp(Eigen::VectorXd::Constant(1, Model::EquivalentValue(delay_s)));
+  }
+};
+
+//   struct MyWrenchModel {
+//     template <typename T>
+//     static void Add(const T* p, const RotorSample<T>& sample, RotorWrenchTerms<T>* terms);
+//   };
+template <class Model>
+class RotorWrenchEffect final : public EffectDescriptor {
+ public:
+  explicit RotorWrenchEffect(Info info) : EffectDescriptor(std::move(info)) {}
+  void AddRotorWrench(const double* p, const RotorSample<double>& s, RotorWrenchTerms<double>* t) const override {
+    Model::Add(p, s, t);
+  }
+  void AddRotorWrench(const ImuJet* p, const RotorSample<ImuJet>& s, RotorWrenchTerms<ImuJet>* t) const override {
+    Model::Add(p, s, t);
+  }
+  void AddRotorWrench(const WideImuJet* p, const RotorSample<WideImuJet>& s,
+                      RotorWrenchTerms<WideImuJet>* t) const override {
+    Model::Add(p, s, t);
   }
 };
 

@@ -9,7 +9,12 @@
   X(AccBiasEffect)         \
   X(GyroBiasEffect)        \
   X(MisalignmentEffect)    \
-  X(ImuLeverArmEffect)
+  X(ImuLeverArmEffect)     \
+  X(RotorDragEffect)       \
+  X(RotorInertiaEffect)    \
+  X(RotorThrustScaleEffect) \
+  X(AccDelayEffect)         \
+  X(GroundEffectEffect)
 
 namespace rotorid {
 namespace internal {

@@ -39,6 +39,8 @@ bool FlightInputs::Has(FlightInput input) const {
       return rotor_acceleration;
     case FlightInput::kRotorCommand:
       return rotor_command;
+    case FlightInput::kRotorRadius:
+      return rotor_radius;
   }
   return false;
 }
@@ -55,25 +57,30 @@ const char* FlightInputName(FlightInput input) {
       return "the rotor acceleration";
     case FlightInput::kRotorCommand:
       return "the raw motor command (a command log with a command-to-speed map)";
+    case FlightInput::kRotorRadius:
+      return "the propeller radius (rotor_radius in the vehicle file)";
   }
   return "?";
 }
 
-int EffectDescriptor::Dimension(const Vehicle& /*vehicle*/) const { return info_.dimension; }
+int EffectDescriptor::Dimension(const Vehicle& vehicle) const {
+  return info_.per_rotor ? vehicle.num_rotors() : info_.dimension;
+}
 
 std::string EffectDescriptor::Unavailable(const FlightInputs& available) const {
   std::string missing;
   for (FlightInput input : info_.inputs)
     if (!available.Has(input)) missing += (missing.empty() ? "" : " and ") + std::string(FlightInputName(input));
-  return missing.empty() ? std::string() : info_.name + " needs " + missing + ", which this log lacks";
+  return missing.empty() ? std::string() : info_.name + " needs " + missing + ", which this flight lacks";
 }
 
 std::vector<std::string> EffectDescriptor::Labels(int dimension) const {
-  if (dimension == 1) return {info_.parameter_name};
+  if (static_cast<int>(info_.labels.size()) == dimension) return info_.labels;
+  if (dimension == 1 && !info_.per_rotor) return {info_.parameter_name};
   std::vector<std::string> labels;
   const char* axes[3] = {"_x", "_y", "_z"};
   for (int k = 0; k < dimension; ++k)
-    labels.push_back(info_.parameter_name + (dimension == 3 ? std::string(axes[k]) : "_" + std::to_string(k + 1)));
+    labels.push_back(info_.parameter_name + (dimension == 3 && !info_.per_rotor ? std::string(axes[k]) : "_" + std::to_string(k + 1)));
   return labels;
 }
 
@@ -128,6 +135,16 @@ void EffectDescriptor::TransformRotorSignal(const RotorJet*, double, const Eigen
   NotOfStage(*this, "rotor-signal model");
 }
 Eigen::VectorXd EffectDescriptor::FromEquivalentDelay(double) const { NotOfStage(*this, "equivalent delay"); }
+void EffectDescriptor::AddRotorWrench(const double*, const RotorSample<double>&, RotorWrenchTerms<double>*) const {
+  NotOfStage(*this, "rotor-wrench model");
+}
+void EffectDescriptor::AddRotorWrench(const ImuJet*, const RotorSample<ImuJet>&, RotorWrenchTerms<ImuJet>*) const {
+  NotOfStage(*this, "rotor-wrench model");
+}
+void EffectDescriptor::AddRotorWrench(const WideImuJet*, const RotorSample<WideImuJet>&,
+                                      RotorWrenchTerms<WideImuJet>*) const {
+  NotOfStage(*this, "rotor-wrench model");
+}
 
 std::vector<EffectKind> EffectsOfStage(EffectStage stage) {
   std::vector<EffectKind> out;
@@ -212,6 +229,12 @@ bool Effects::IsZero(EffectKind kind) const {
 bool Effects::StageIsZero(EffectStage stage) const {
   for (EffectKind kind : AllEffects())
     if (kind->stage() == stage && !IsZero(kind)) return false;
+  return true;
+}
+
+bool Effects::AllZero() const {
+  for (EffectKind kind : AllEffects())
+    if (!IsZero(kind)) return false;
   return true;
 }
 

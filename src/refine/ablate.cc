@@ -48,7 +48,8 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
         entry.held_out_relative_error_pct = RelativeErrorWithEffects(held_out, values, entry.result.effects);
       int free = 0;
       for (bool e : linear.solution.essential) free += e;
-      for (EffectKind k : entry.effects) free += EffectDimension(k);
+      // A zero-sum effect's sum is pinned: one free value fewer.
+      for (EffectKind k : entry.effects) free += k->Dimension(linear.flights.front().vehicle) - k->info().zero_sum;
       entry.num_parameters = free;
     }
     const int finished = ++done;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "refine/effect_rows.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/signal/butterworth.h"
 
@@ -54,6 +55,10 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
   const Eigen::Index rotors = flight.rotor_raw.cols(), n = flight.rotor_raw.rows();
   EffectiveRotor out;
   out.speed.resize(rows, rotors);
+  if (chain.empty()) {  // the flight's own rotor entries
+    for (int r = 0; r < rows; ++r) out.speed.row(r) = flight.rotor.row(flight.row_samples[r]);
+    return out;
+  }
   out.derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
   Eigen::MatrixXd speed;
   for (size_t first = 0; first == 0 || first < coordinates.size(); first += kRotorJetSize) {
@@ -92,21 +97,10 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
 }
 
 Eigen::MatrixXd BuildIdimMatrixWithEffects(const ProcessedFlight& flight, const Effects& effects) {
-  const Eigen::MatrixXd rotor =
-      effects.StageIsZero(EffectStage::kRotorSignal)
-          ? Eigen::MatrixXd(flight.rotor)
-          : FilteredRotorSpeed(flight.filter, RotorSignalWithEffects(flight, effects).array().square().matrix());
-  const EffectChain imu = ActingEffects(effects, EffectStage::kImuSensor);
-  const std::vector<const double*> parameters = imu.Parameters();
-  const int rows = flight.num_rows_samples();
-  Eigen::MatrixXd w(6 * rows, kNumIdimColumns);
-  for (int r = 0; r < rows; ++r) {
-    const int i = flight.row_samples[r];
-    ImuSample<double> s = LoggedImu<double>(flight, i);
-    CorrectImu<double>(imu.kinds, parameters, &s);
-    w.middleRows<6>(6 * r) = IdimRows<double>(s.angular_velocity, s.angular_acceleration, s.specific_force,
-                                              rotor.row(i).transpose(), flight.vehicle);
-  }
+  const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
+  const internal::EffectRows rows(&flight, effects, {}, &rotor);
+  Eigen::MatrixXd w(6 * flight.num_rows_samples(), kNumIdimColumns);
+  for (int r = 0; r < flight.num_rows_samples(); ++r) w.middleRows<6>(6 * r) = rows.Rows<double>(r);
   return w;
 }
 

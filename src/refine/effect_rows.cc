@@ -6,13 +6,43 @@
 
 namespace rotorid::internal {
 
+namespace {
+
+template <typename T>
+using VectorT = Eigen::Matrix<T, Eigen::Dynamic, 1>;
+
+// The values of a stage's links as T, with the Jet slot of each coordinate in [first, last) seeded.
+template <typename T>
+std::vector<VectorT<T>> StageValues(const EffectChain& chain, const std::vector<int>& free_index,
+                                    const std::vector<EffectRows::Coordinate>& coordinates, size_t first, size_t last) {
+  std::vector<VectorT<T>> values;
+  for (const Eigen::VectorXd& v : chain.values) values.push_back(v.cast<T>());
+  if constexpr (!std::is_same_v<T, double>)
+    for (size_t c = first; c < last; ++c)
+      for (size_t j = 0; j < chain.kinds.size(); ++j)
+        if (free_index[j] == coordinates[c].effect) values[j][coordinates[c].index].v[c - first] = 1.0;
+  return values;
+}
+
+template <typename T>
+std::vector<const T*> Pointers(const std::vector<VectorT<T>>& values) {
+  std::vector<const T*> out;
+  for (const auto& v : values) out.push_back(v.data());
+  return out;
+}
+
+}  // namespace
+
 EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, const std::vector<EffectKind>& free,
                        const EffectiveRotor* rotor)
-    : flight_(flight), rotor_(rotor), imu_(ActingEffects(effects, EffectStage::kImuSensor, free)) {
-  for (EffectKind kind : imu_.kinds)
-    imu_free_.push_back(static_cast<int>(std::find(free.begin(), free.end(), kind) - free.begin()));
-  for (int& f : imu_free_)
-    if (f == static_cast<int>(free.size())) f = -1;
+    : flight_(flight), rotor_(rotor) {
+  for (auto [stage, out] : {std::pair{EffectStage::kImuSensor, &imu_}, std::pair{EffectStage::kRotorWrench, &wrench_}}) {
+    out->chain = ActingEffects(effects, stage, free);
+    for (EffectKind kind : out->chain.kinds) {
+      const auto it = std::find(free.begin(), free.end(), kind);
+      out->free_index.push_back(it == free.end() ? -1 : static_cast<int>(it - free.begin()));
+    }
+  }
   int rotor_derivative = 0;
   for (size_t b = 0; b < free.size(); ++b) {
     const bool on_rotor = free[b]->stage() == EffectStage::kRotorSignal;
@@ -23,32 +53,28 @@ EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, co
 
 template <typename T>
 Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, size_t first) const {
-  constexpr bool kIsJet = !std::is_same_v<T, double>;
-  std::vector<Eigen::Matrix<T, Eigen::Dynamic, 1>> values;
-  for (const Eigen::VectorXd& v : imu_.values) values.push_back(v.cast<T>());
   const int rotors = flight_->vehicle.num_rotors();
-  Eigen::Matrix<T, Eigen::Dynamic, 1> omega(rotors);
+  size_t last = first;
+  if constexpr (!std::is_same_v<T, double>) last = std::min(coordinates_.size(), first + T::DIMENSION);
+  VectorT<T> omega(rotors);
   for (int k = 0; k < rotors; ++k) omega[k] = T(rotor_->speed(row_sample, k));
-  if constexpr (kIsJet) {
-    // The coordinates differentiated here, each with its Jet slot.
-    const size_t last = std::min(coordinates_.size(), first + static_cast<size_t>(T::DIMENSION));
-    for (size_t c = first; c < last; ++c) {
-      const Coordinate& coordinate = coordinates_[c];
-      const int slot = static_cast<int>(c - first);
-      if (coordinate.rotor_derivative >= 0) {
-        for (int k = 0; k < rotors; ++k)
-          omega[k].v[slot] = rotor_->derivative[coordinate.rotor_derivative](row_sample, k);
-        continue;
-      }
-      for (size_t j = 0; j < imu_.kinds.size(); ++j)
-        if (imu_free_[j] == coordinate.effect) values[j][coordinate.index].v[slot] = 1.0;
-    }
-  }
-  std::vector<const T*> parameters;
-  for (const auto& v : values) parameters.push_back(v.data());
-  ImuSample<T> imu = LoggedImu<T>(*flight_, flight_->row_samples[row_sample]);
-  CorrectImu<T>(imu_.kinds, parameters, &imu);
-  return IdimRows<T>(imu.angular_velocity, imu.angular_acceleration, imu.specific_force, omega, flight_->vehicle);
+  if constexpr (!std::is_same_v<T, double>)
+    for (size_t c = first; c < last; ++c)
+      if (const int d = coordinates_[c].rotor_derivative; d >= 0)
+        for (int k = 0; k < rotors; ++k) omega[k].v[c - first] = rotor_->derivative[d](row_sample, k);
+  const int i = flight_->row_samples[row_sample];
+  ImuSample<T> imu = LoggedImu<T>(*flight_, i);
+  const std::vector<VectorT<T>> imu_values = StageValues<T>(imu_.chain, imu_.free_index, coordinates_, first, last);
+  CorrectImu<T>(imu_.chain.kinds, Pointers(imu_values), &imu);
+  Eigen::Matrix<T, 6, kNumIdimColumns> rows =
+      IdimRows<T>(imu.angular_velocity, imu.angular_acceleration, imu.specific_force, omega, flight_->vehicle);
+  if (wrench_.chain.kinds.empty()) return rows;
+  RotorSample<T> sample = FlightRotorSample<T>(*flight_, i, omega, imu.angular_velocity);
+  const std::vector<VectorT<T>> values = StageValues<T>(wrench_.chain, wrench_.free_index, coordinates_, first, last);
+  RotorWrenchTerms<T> terms(rotors);
+  AddRotorWrench<T>(wrench_.chain.kinds, Pointers(values), sample, &terms);
+  ApplyRotorWrenchTerms<T>(omega, flight_->vehicle, terms, &rows);
+  return rows;
 }
 
 template Eigen::Matrix<double, 6, kNumIdimColumns> EffectRows::Rows<double>(int, size_t) const;

@@ -3,7 +3,8 @@
 // Internal: the IDIM rows of a flight's row samples with effects, differentiated with respect to
 // the scalar coordinates of the free effects by ceres::Jet. The one model that the refinement's
 // residual blocks and the diagnosis' linearisation both evaluate, so that their derivatives
-// cannot disagree.
+// cannot disagree. Per sample: the IMU effects correct the logged IMU, then the rotor-wrench
+// effects change the rotor columns (per-rotor factors) and the known column (their extra wrench).
 
 #include <Eigen/Core>
 #include <vector>
@@ -37,8 +38,13 @@ class EffectRows {
  private:
   const ProcessedFlight* flight_;
   const EffectiveRotor* rotor_;
-  EffectChain imu_;            // acting IMU effects (non-zero or free), chain order
-  std::vector<int> imu_free_;  // per link of imu_: index into `free`, or -1
+  // The acting effects (non-zero or free) of the stages evaluated per sample, chain order, and
+  // per link its index into `free` (or -1).
+  struct Stage {
+    EffectChain chain;
+    std::vector<int> free_index;
+  };
+  Stage imu_, wrench_;
   std::vector<Coordinate> coordinates_;
 };
 

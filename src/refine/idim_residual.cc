@@ -11,7 +11,7 @@ namespace rotorid::internal {
 Effects EffectBlocks::At(double const* const* parameters, const Vehicle& vehicle) const {
   Effects effects = fixed;
   for (size_t j = 0; j < free.size(); ++j)
-    effects.Set(free[j], Eigen::Map<const Eigen::VectorXd>(parameters[1 + j], free[j]->Dimension(vehicle)));
+    effects.Set(free[j], Scale(j) * Eigen::Map<const Eigen::VectorXd>(parameters[1 + j], free[j]->Dimension(vehicle)));
   return effects;
 }
 
@@ -92,7 +92,8 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
           double* j = jacobians[1 + coordinate.effect];
           if (!j) continue;
           const int size = parameter_block_sizes()[1 + coordinate.effect];
-          j[out * size + coordinate.index] = scale * e.v[k - first_coordinate];
+          j[out * size + coordinate.index] =
+              scale * blocks_->Scale(static_cast<size_t>(coordinate.effect)) * e.v[k - first_coordinate];
         }
     }
   }

@@ -19,6 +19,10 @@ namespace rotorid::internal {
 struct EffectBlocks {
   std::vector<EffectKind> free;
   Effects fixed;
+  // Per free effect, the unit its block is in (value = block * scale; empty: 1).
+  std::vector<double> scale;
+
+  double Scale(size_t j) const { return j < scale.size() ? scale[j] : 1.0; }
 
   // The effects at a point: the free ones from the parameter blocks (parameters[1 + j]).
   Effects At(double const* const* parameters, const Vehicle& vehicle) const;

@@ -234,6 +234,37 @@ std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(ceres::Problem* proble
   return found;
 }
 
+// Pins the sum of a zero-sum effect's values: their mean is a linear parameter's (a common thrust
+// factor is kt's), so the rows cannot fix it and only the TLS normalisation pulls on it, weakly;
+// 100 x the square root of the row count outweighs that pull (sums below 1e-6 on the flights
+// tested) and keeps the problem well conditioned.
+class ZeroSumResidual : public ceres::CostFunction {
+ public:
+  ZeroSumResidual(int size, double weight) : weight_(weight) {
+    set_num_residuals(1);
+    mutable_parameter_block_sizes()->push_back(size);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const int size = parameter_block_sizes()[0];
+    residuals[0] = weight_ * Eigen::Map<const Eigen::VectorXd>(parameters[0], size).sum();
+    if (jacobians && jacobians[0]) std::fill(jacobians[0], jacobians[0] + size, weight_);
+    return true;
+  }
+
+ private:
+  double weight_;
+};
+
+// The unit a free effect's parameter block is in: effects whose realistic size is far below 1
+// (coefficients of 1e-5) are solved in units of that size, so that their Jacobian columns are
+// comparable with chi's scaled ones and ceres::Covariance sees a well-conditioned matrix; the others
+// in SI units, as they always were.
+double RefineScale(EffectKind kind) {
+  const DrawRange& draw = kind->info().draw;
+  const double typical = std::max(std::abs(draw.low), std::abs(draw.high)) * draw.to_si;
+  return typical > 0.0 && typical < 1e-3 ? typical : 1.0;
+}
+
 // The bounds a refinement keeps an effect in: its physical range, or for a grid-searched effect
 // the search range.
 std::pair<double, double> RefineBounds(EffectKind kind, const RefineOptions& options) {
@@ -265,9 +296,10 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
     if (options.Enabled(kind)) effect_blocks.free.push_back(kind);
   std::vector<Eigen::VectorXd> effect_values;
   for (EffectKind kind : effect_blocks.free) {
+    effect_blocks.scale.push_back(RefineScale(kind));
     Eigen::VectorXd v = start.Get(kind);
     if (v.size() == 0) v = Eigen::VectorXd::Zero(kind->Dimension(vehicle));
-    effect_values.push_back(v);
+    effect_values.push_back(v / effect_blocks.scale.back());
   }
 
   ceres::Problem::Options problem_options;
@@ -305,9 +337,13 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
     const auto [lower, upper] = RefineBounds(effect_blocks.free[b], options);
     for (Eigen::Index a = 0; a < effect_values[b].size(); ++a) {
-      problem.SetParameterLowerBound(effect_values[b].data(), static_cast<int>(a), lower);
-      problem.SetParameterUpperBound(effect_values[b].data(), static_cast<int>(a), upper);
+      problem.SetParameterLowerBound(effect_values[b].data(), static_cast<int>(a), lower / effect_blocks.Scale(b));
+      problem.SetParameterUpperBound(effect_values[b].data(), static_cast<int>(a), upper / effect_blocks.Scale(b));
     }
+    if (effect_blocks.free[b]->info().zero_sum)
+      problem.AddResidualBlock(
+          new ZeroSumResidual(static_cast<int>(effect_values[b].size()), 100.0 * std::sqrt(context.total_rows)), nullptr,
+          effect_values[b].data());
   }
 
   ceres::Solver::Options solver_options;
@@ -396,7 +432,8 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
       int e = 0;
       for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
         const Eigen::Index size = effect_values[b].size();
-        result.effects_std.Set(effect_blocks.free[b], effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
+        result.effects_std.Set(effect_blocks.free[b], effect_blocks.Scale(b) *
+                                                          effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
         e += static_cast<int>(size);
       }
       result.effect_labels = effect_labels;

@@ -27,15 +27,21 @@ nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const s
   for (EffectKind kind : AllEffects()) {
     const bool on = std::find(enabled.begin(), enabled.end(), kind) != enabled.end();
     const Eigen::VectorXd v = value.Get(kind), s = std_dev.Get(kind);
-    nlohmann::json entry;
-    if (EffectDimension(kind) == 1) {
-      entry = {{"value", Number(v[0])}, {"std", Number(s[0])}};
+    const bool bounded = std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end();
+    const auto entry = [&](nlohmann::json estimate, nlohmann::json spread) {
+      return nlohmann::json{{"value", estimate}, {"std", spread}, {"enabled", on}, {"on_bound", bounded}};
+    };
+    const auto at = [](const Eigen::VectorXd& x, size_t k) {
+      return static_cast<Eigen::Index>(k) < x.size() ? x[static_cast<Eigen::Index>(k)] : 0.0;
+    };
+    const std::vector<std::string>& labels = kind->info().labels;
+    if (!labels.empty()) {  // one key per coefficient, as INTERFACE.md names them
+      for (size_t k = 0; k < labels.size(); ++k) out[labels[k]] = entry(Number(at(v, k)), Number(at(s, k)));
+    } else if (kind->FixedDimension() == 1) {
+      out[EffectParameterName(kind)] = entry(Number(v[0]), Number(s[0]));
     } else {
-      entry = {{"value", VectorJson(v)}, {"std", VectorJson(s)}};
+      out[EffectParameterName(kind)] = entry(VectorJson(v), VectorJson(s));
     }
-    entry["enabled"] = on;
-    entry["on_bound"] = std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end();
-    out[EffectParameterName(kind)] = entry;
   }
   return out;
 }
@@ -72,11 +78,22 @@ Effects EffectsFromReport(const nlohmann::json& report) {
   if (!report.contains("refined") || !report["refined"].contains("effects")) return effects;
   const nlohmann::json& block = report["refined"]["effects"];
   for (EffectKind kind : AllEffects()) {
+    const std::vector<std::string>& labels = kind->info().labels;
+    if (!labels.empty()) {
+      Eigen::VectorXd value = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(labels.size()));
+      for (size_t k = 0; k < labels.size(); ++k)
+        if (block.contains(labels[k]) && block[labels[k]].contains("value") && block[labels[k]]["value"].is_number())
+          value[static_cast<Eigen::Index>(k)] = block[labels[k]]["value"].get<double>();
+      effects.Set(kind, value);
+      continue;
+    }
     const char* name = EffectParameterName(kind);
     if (!block.contains(name) || !block[name].contains("value")) continue;
     const nlohmann::json& v = block[name]["value"];
-    Eigen::VectorXd value(EffectDimension(kind));
-    if (v.is_number()) {
+    // A per-rotor effect has as many values as the report's vehicle has rotors.
+    const int dimension = kind->FixedDimension();
+    Eigen::VectorXd value(dimension >= 0 ? dimension : (v.is_array() ? static_cast<int>(v.size()) : 0));
+    if (v.is_number() && value.size() == 1) {
       value[0] = v.get<double>();
     } else if (v.is_array() && static_cast<int>(v.size()) == value.size()) {
       for (int k = 0; k < value.size(); ++k) value[k] = v[k].is_number() ? v[k].get<double>() : 0.0;

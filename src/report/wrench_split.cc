@@ -12,9 +12,7 @@ WrenchSplit ComputeWrenchSplit(const ProcessedFlight& flight, const std::map<std
   const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
   // Without effects the plain rows are the ones the linear identification used.
   const Eigen::MatrixXd w =
-      effects.StageIsZero(EffectStage::kRotorSignal) && effects.StageIsZero(EffectStage::kImuSensor)
-          ? BuildIdimMatrix(flight)
-          : BuildIdimMatrixWithEffects(flight, effects);
+      effects.AllZero() ? BuildIdimMatrix(flight) : BuildIdimMatrixWithEffects(flight, effects);
   const int rows = flight.num_rows_samples();
   if (w.rows() != 6 * rows || w.cols() != chi_t.size())
     throw Error(flight.source + ": IDIM rows do not match the flight (" + std::to_string(w.rows()) + " rows for " +

@@ -18,11 +18,12 @@ constexpr int kRotorIndex = 13;
 }  // namespace
 
 MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                                       double motor_time_constant_s)
+                                       double motor_time_constant_s, EffectChain rotor_wrench)
     : vehicle_(vehicle),
       parameters_(parameters),
       gravity_w_(0.0, 0.0, -gravity_mps2),
-      motor_time_constant_s_(motor_time_constant_s) {
+      motor_time_constant_s_(motor_time_constant_s),
+      rotor_wrench_(std::move(rotor_wrench)) {
   if (!(gravity_mps2 >= 0.0) || !std::isfinite(gravity_mps2)) throw Error("gravity must be a finite number >= 0");
   if (!(motor_time_constant_s >= 0.0) || !std::isfinite(motor_time_constant_s))
     throw Error("motor_time_constant_s must be a finite number >= 0");
@@ -43,11 +44,39 @@ Eigen::VectorXd MultirotorDynamics::ActingRotorSpeeds(double t_s, const SimState
   return motor_time_constant_s_ > 0.0 ? state.rotor_speed_radps : command(t_s);
 }
 
-BodyAcceleration MultirotorDynamics::Accelerations(const SimState& state,
-                                                   const Eigen::VectorXd& rotor_speed_radps) const {
+Eigen::VectorXd MultirotorDynamics::ActingRotorRates(double t_s, const SimState& state,
+                                                     const RotorCommand& command) const {
+  if (vehicle_.rotors.empty()) return Eigen::VectorXd();
+  if (motor_time_constant_s_ > 0.0) return (command(t_s) - state.rotor_speed_radps) / motor_time_constant_s_;
+  // The command is linear between its kinks; the integrator's steps end on them, so the one-sided
+  // slope into the step is the one acting.
+  constexpr double kProbe = 1e-7;
+  return (command(t_s + kProbe) - command(t_s)) / kProbe;
+}
+
+BodyAcceleration MultirotorDynamics::Accelerations(const SimState& state, const Eigen::VectorXd& rotor_speed_radps,
+                                                   const Eigen::VectorXd& rotor_rate_radps2) const {
   Wrench<double> wrench = Wrench<double>::Zero();
-  if (!vehicle_.rotors.empty())
-    wrench = RotorWrench<double>(rotor_speed_radps, parameters_.rotor.kt, parameters_.rotor.kd, vehicle_);
+  if (!vehicle_.rotors.empty()) {
+    RotorWrenchTerms<double> terms(vehicle_.num_rotors());
+    if (!rotor_wrench_.kinds.empty()) {
+      RotorSample<double> sample;
+      sample.vehicle = &vehicle_;
+      sample.speed = rotor_speed_radps;
+      sample.acceleration = rotor_rate_radps2.size() == rotor_speed_radps.size()
+                                ? rotor_rate_radps2
+                                : Eigen::VectorXd::Zero(rotor_speed_radps.size());
+      sample.angular_velocity = state.angular_velocity_b_radps;
+      const Eigen::Quaterniond attitude = state.attitude_wb.normalized();
+      sample.velocity = attitude.conjugate() * state.velocity_w_mps;
+      // The world's z = 0 is the ground.
+      sample.height.resize(vehicle_.num_rotors());
+      for (int i = 0; i < vehicle_.num_rotors(); ++i)
+        sample.height[i] = (state.position_w_m + attitude * vehicle_.rotors[i].position_m).z();
+      AddRotorWrench<double>(rotor_wrench_.kinds, rotor_wrench_.Parameters(), sample, &terms);
+    }
+    wrench = RotorWrench<double>(rotor_speed_radps, parameters_.rotor.kt, parameters_.rotor.kd, vehicle_, terms);
+  }
   BodyAcceleration acc;
   ForwardDynamics<double>(state.angular_velocity_b_radps, wrench, parameters_.mass_kg, parameters_.body.first_moment,
                           parameters_.body.inertia, &acc.specific_force_b_mps2, &acc.angular_acceleration_b_radps2);
@@ -86,7 +115,8 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   // keeps the raw q so that the step stays a plain RK4 step.
   const Eigen::Matrix3d r_wb = state.attitude_wb.normalized().toRotationMatrix();
   const Eigen::VectorXd acting = ActingRotorSpeeds(t_s, state, command);
-  const BodyAcceleration acc = Accelerations(state, acting);
+  const Eigen::VectorXd rates = ActingRotorRates(t_s, state, command);
+  const BodyAcceleration acc = Accelerations(state, acting, rates);
 
   Eigen::VectorXd dx(x.size());
   dx.segment<3>(kPositionIndex) = state.velocity_w_mps;
@@ -96,7 +126,7 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   dx.segment<4>(kQuaternionIndex) << 0.5 * q_dot.w(), 0.5 * q_dot.x(), 0.5 * q_dot.y(), 0.5 * q_dot.z();
   dx.segment<3>(kAngularVelocityIndex) = acc.angular_acceleration_b_radps2;
   if (motor_time_constant_s_ > 0.0 && !vehicle_.rotors.empty())
-    dx.tail(vehicle_.num_rotors()) = (command(t_s) - state.rotor_speed_radps) / motor_time_constant_s_;
+    dx.tail(vehicle_.num_rotors()) = rates;
   else
     dx.tail(vehicle_.num_rotors()).setZero();
   return dx;

@@ -49,6 +49,7 @@ Eigen::VectorXd ReadNumbers(const std::string& source, const YAML::Node& node, c
 SimulationVehicle PresetVehicle(const std::string& name) {
   SimulationVehicle a;
   a.vehicle = PlusQuad("A", 1.285, kPaperArmM);
+  a.vehicle.rotor_radius_m = 0.127;  // 10-inch propellers
   a.parameters.mass_kg = 1.285;
   a.parameters.rotor = {kPaperKt, kPaperKd};
   a.parameters.body =

@@ -18,7 +18,6 @@
 namespace rotorid {
 namespace {
 
-constexpr double kHoverAltitudeM = 1.5;
 
 // Independent random streams drawn from the one seed.
 enum RandomStreamId : std::uint64_t { kPilotStream = 1, kControllerStream, kJitterStream, kImuStream, kMocapStream };
@@ -99,6 +98,7 @@ SimulationResult PrepareResult(const Vehicle& vehicle, const VehicleParameters& 
   log.metadata["seed"] = std::to_string(options.seed);
   log.metadata["noise"] = options.noise.name;
   log.metadata["vehicle"] = vehicle.name;
+  log.metadata["ground_z"] = "0";  // the world's z = 0 is the ground (ground_effect)
   log.metadata["rate_hz"] = FormatNumber(options.log_rate_hz);
 
   TrueStates& states = result.states;
@@ -189,6 +189,8 @@ std::string SimulationOptions::Validate() const {
   if (bad(excitation) || excitation < 0.0 || excitation > 2.0)
     return "excitation must be within [0, 2] (got " + FormatNumber(excitation) + ")";
   if (bad(hover_lead_in_s) || hover_lead_in_s < 0.0) return "hover lead-in must be >= 0 s";
+  if (bad(hover_altitude_m) || hover_altitude_m < 0.1 || hover_altitude_m > 1000.0)
+    return "hover altitude must be within [0.1, 1000] m (got " + FormatNumber(hover_altitude_m) + ")";
   if (bad(warmup_s) || warmup_s < 0.0 || warmup_s > 60.0) return "warm-up must be within [0, 60] s";
   if (bad(controller_error_min) || bad(controller_error_max) || controller_error_min < 0.0 ||
       controller_error_max < controller_error_min || controller_error_max > 0.3)
@@ -215,6 +217,32 @@ Eigen::VectorXd HoverRotorSpeeds(const Vehicle& vehicle, const VehicleParameters
   return speed_sq.cwiseSqrt();
 }
 
+namespace {
+
+// Adds the accelerometer signal of every sample k (at times[k], warm-up included) to the logged
+// rows (from num_warmup on), read `delay_s` earlier: acc_log(t) = s(t - delay_s), linear between
+// the samples (at 200 Hz its error is far below any accelerometer's noise), held beyond the ends.
+void AddDelayedAccelerometer(const std::vector<double>& times, const std::vector<Eigen::Vector3d>& clean,
+                             int num_warmup, double delay_s, Eigen::MatrixX3d* logged) {
+  for (Eigen::Index row = 0; row < logged->rows(); ++row) {
+    const size_t k = static_cast<size_t>(num_warmup + row);
+    if (delay_s == 0.0) {
+      logged->row(row) += clean[k].transpose();
+      continue;
+    }
+    const double t = times[k] - delay_s;
+    const size_t after = static_cast<size_t>(std::upper_bound(times.begin(), times.end(), t) - times.begin());
+    if (after == 0 || after == times.size()) {
+      logged->row(row) += clean[after == 0 ? 0 : times.size() - 1].transpose();
+      continue;
+    }
+    const double a = (t - times[after - 1]) / (times[after] - times[after - 1]);
+    logged->row(row) += ((1.0 - a) * clean[after - 1] + a * clean[after]).transpose();
+  }
+}
+
+}  // namespace
+
 SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error("simulation options: " + problem);
   if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error("simulated vehicle: " + problem);
@@ -228,9 +256,14 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     command_latency_s += kind->SimulatedCommandDelay(effects.Get(kind));
     motor_time_constant_s += kind->SimulatedMotorTimeConstant(effects.Get(kind));
   }
-  // The sensor effects in chain order, from the body towards the log.
+  // The sensor effects in chain order, from the body towards the log, and the delay of the
+  // accelerometer stream behind the gyro's (applied to the whole series after the flight).
   const EffectChain sensor = ActingEffects(effects, EffectStage::kImuSensor);
-  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s);
+  double accelerometer_delay_s = 0.0;
+  for (size_t j = 0; j < sensor.kinds.size(); ++j)
+    accelerometer_delay_s += sensor.kinds[j]->SimulatedAccelerometerDelay(sensor.values[j]);
+  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
+                                    ActingEffects(effects, EffectStage::kRotorWrench));
   const double g = options.gravity_mps2;
 
   // The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
@@ -248,7 +281,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   internal::PilotOptions pilot_options;
   pilot_options.excitation = options.excitation;
   pilot_options.start_s = options.hover_lead_in_s;
-  pilot_options.hover_altitude_m = kHoverAltitudeM;
+  pilot_options.hover_altitude_m = options.hover_altitude_m;
   const internal::Pilot pilot(pilot_options, &pilot_random);
 
   // Sampling instants: the unlogged warm-up, then the log; jitter clipped so time keeps increasing.
@@ -268,7 +301,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   // Start trimmed in hover at rest: rotors at the exact hover speeds, controller integrators preset.
   const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
   SimState state;
-  state.position_w_m = Eigen::Vector3d(0.0, 0.0, kHoverAltitudeM);
+  state.position_w_m = Eigen::Vector3d(0.0, 0.0, options.hover_altitude_m);
   state.rotor_speed_radps = hover;
   DelayedRotorSignal rotor_signal(command_latency_s);
   rotor_signal.Append(times[0], hover);
@@ -283,12 +316,13 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   RandomStream imu_random(options.seed, kImuStream);
   RandomStream mocap_random(options.seed, kMocapStream);
   double previous_yaw = 0.0, previous_noisy_yaw = 0.0;
+  std::vector<Eigen::Vector3d> clean_accelerometer(num_total);
 
   for (int k = 0; k < num_total; ++k) {
     const double t = times[k];
     const Eigen::Matrix3d r_wb = state.attitude_wb.toRotationMatrix();
     const Eigen::VectorXd acting = dynamics.ActingRotorSpeeds(t, state, command);
-    const BodyAcceleration acc = dynamics.Accelerations(state, acting);
+    const BodyAcceleration acc = dynamics.Accelerations(state, acting, dynamics.ActingRotorRates(t, state, command));
     if (!state.position_w_m.allFinite() || state.position_w_m.norm() > 1000.0 ||
         r_wb(2, 2) < std::cos(80.0 / kRadToDeg))
       throw Error("the simulated flight diverged at t = " + FormatNumber(t) + " s (tilt " +
@@ -300,7 +334,8 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     ImuSample<double> imu{state.angular_velocity_b_radps, acc.angular_acceleration_b_radps2, acc.specific_force_b_mps2};
     for (size_t j = 0; j < sensor.kinds.size(); ++j) sensor.kinds[j]->ApplyToSensor(sensor.values[j].data(), &imu);
     const Eigen::Vector3d gyro = imu.angular_velocity + NoiseVector(&imu_random, options.noise.gyro_std_radps);
-    const Eigen::Vector3d accelerometer = imu.specific_force + NoiseVector(&imu_random, options.noise.acc_std_mps2);
+    const Eigen::Vector3d acc_noise = NoiseVector(&imu_random, options.noise.acc_std_mps2);
+    clean_accelerometer[k] = imu.specific_force;
 
     Eigen::Vector3d bryant = RotationToBryant(r_wb);
     bryant.z() = previous_yaw = Unwrap(bryant.z(), previous_yaw);
@@ -308,7 +343,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
       const int row = k - num_warmup;
       log.t_s[row] = t;
       log.gyro_radps.row(row) = gyro;
-      log.acc_mps2.row(row) = accelerometer;
+      log.acc_mps2.row(row) = acc_noise;  // the signal is added after the flight
       log.rotor_radps.row(row) = rotor_signal.Sample(k);
       if (options.mocap) {
         log.mocap->position_w_m.row(row) =
@@ -354,6 +389,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
       segment_start = segment_end;
     }
   }
+  AddDelayedAccelerometer(times, clean_accelerometer, num_warmup, accelerometer_delay_s, &log.acc_mps2);
   result.summary = Summarise(states);
   return result;
 }

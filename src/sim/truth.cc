@@ -32,6 +32,7 @@ Json OptionsJson(const SimulationResult& result) {
               {"mocap", o.mocap},
               {"jitter_s", o.jitter_s},
               {"excitation", o.excitation},
+              {"hover_altitude_m", o.hover_altitude_m},
               {"hover_lead_in_s", o.hover_lead_in_s},
               {"warmup_s", o.warmup_s}};
 }
@@ -69,9 +70,14 @@ std::string TruthToJson(const SimulationResult& result) {
     const Eigen::VectorXd value = result.effects.Get(kind).size() > 0
                                       ? result.effects.Get(kind)
                                       : Eigen::VectorXd::Zero(kind->Dimension(result.vehicle));
-    effects[kind->parameter_name()] = kind->FixedDimension() == 1
-                                          ? Json(value[0])
-                                          : Json(std::vector<double>(value.data(), value.data() + value.size()));
+    const std::vector<std::string>& labels = kind->info().labels;
+    if (!labels.empty()) {  // one key per coefficient, as INTERFACE.md names them
+      for (size_t k = 0; k < labels.size(); ++k) effects[labels[k]] = value[static_cast<Eigen::Index>(k)];
+    } else {
+      effects[kind->parameter_name()] = kind->FixedDimension() == 1
+                                            ? Json(value[0])
+                                            : Json(std::vector<double>(value.data(), value.data() + value.size()));
+    }
   }
 
   Json truth;
@@ -116,6 +122,18 @@ SimulationTruth ParseTruthJson(const std::string& text, const std::string& sourc
   if (!effects.is_object()) throw Error(source + ": 'effects' must be an object");
   // Effects a truth file does not list (written before they existed) are absent.
   for (EffectKind kind : AllEffects()) {
+    const std::vector<std::string>& labels = kind->info().labels;
+    if (!labels.empty()) {
+      Eigen::VectorXd v = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(labels.size()));
+      bool listed = false;
+      for (size_t k = 0; k < labels.size(); ++k)
+        if (effects.contains(labels[k])) {
+          v[static_cast<Eigen::Index>(k)] = Number(effects.at(labels[k]), "effects." + labels[k], source);
+          listed = true;
+        }
+      if (listed) truth.effects.Set(kind, v);
+      continue;
+    }
     const std::string& name = kind->parameter_name();
     if (!effects.contains(name)) continue;
     const Json& value = effects.at(name);

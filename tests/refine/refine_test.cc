@@ -24,11 +24,20 @@ IdentificationResult IdentifySimulated(const std::string& preset, double seconds
 // Every Jacobian of the residual block agrees with numeric differentiation at a generic point
 // (effects away from zero, parameters off the optimum), one block per registered effect.
 TEST(IdimResidualBlockTest, PassesGradientChecker) {
-  Effects effects;
-  effects.Set("delay_s", 0.012);
-  effects.Set("motor_tau_s", 0.03);
-  const IdentificationResult linear = IdentifySimulated("B", 8.0, 3, effects);
+  // Motion capture and a low hover, so that the velocity and the heights the rotor-wrench effects
+  // need are there and matter.
+  const SimulationVehicle preset = PresetVehicle("B");
+  SimulationOptions sim_options;
+  sim_options.duration_s = 8.0;
+  sim_options.seed = 3;
+  sim_options.mocap = true;
+  sim_options.hover_altitude_m = 0.4;
+  sim_options.effects.Set("delay_s", 0.012);
+  sim_options.effects.Set("motor_tau_s", 0.03);
+  const IdentificationResult linear =
+      testing::IdentifySimulated(Simulate(preset.vehicle, preset.parameters, sim_options));
   const ProcessedFlight& flight = linear.flights[0];
+  ASSERT_TRUE(flight.inputs().velocity && flight.inputs().height && flight.inputs().rotor_radius);
   internal::EffectBlocks blocks;
   blocks.free = AllEffects();
   internal::RotorSignalCache cache(&flight, &blocks);

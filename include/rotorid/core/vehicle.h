@@ -33,6 +33,8 @@ struct Vehicle {
   std::vector<Rotor> rotors;
   // Applied to command logs only (a measured rotor speed is used as it is).
   std::optional<CommandToSpeed> command_to_speed;
+  // Propeller radius (m), for the ground effect.
+  std::optional<double> rotor_radius_m = std::nullopt;
   // The file it was read from (empty when built in code), for messages. Last, so that aggregate
   // initialisations {name, mass, rotors, map} stay valid.
   std::string source = "";

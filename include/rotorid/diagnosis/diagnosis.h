@@ -106,8 +106,8 @@ struct EffectTest {
 // One candidate effect, as the diagnosis judged it.
 struct EffectVerdict {
   EffectKind kind = nullptr;
-  // "selected", "confounded" (significant alone, but indistinguishable from a selected effect) or
-  // "not significant".
+  // "selected", "confounded" (significant alone, but indistinguishable from a selected effect),
+  // "not significant", or "unavailable" (a flight lacks an input it needs: `note` says which).
   std::string status;
   bool selected = false;
   bool significant = false;

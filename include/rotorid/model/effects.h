@@ -31,6 +31,7 @@ struct Vehicle;
 enum class EffectStage {
   kRotorSignal,  // the logged rotor signal -> the rotor speeds acting (a whole time series)
   kImuSensor,    // the true body motion at O_b -> the logged gyro and accelerometer
+  kRotorWrench,  // the rotors' wrench beyond the paper's kt, kd model, at one sample
 };
 
 // Flight signals an effect's model may need beyond gyro, accelerometer and rotor signal.
@@ -40,18 +41,49 @@ enum class FlightInput {
   kVoltage,            // battery voltage
   kRotorAcceleration,  // Omega_i'
   kRotorCommand,       // the raw command next to the speed mapped from it
+  kRotorRadius,        // the vehicle file's rotor_radius
 };
 // Which of them a processed flight carries.
 struct FlightInputs {
-  bool velocity = false, height = false, voltage = false, rotor_acceleration = false, rotor_command = false;
+  bool velocity = false, height = false, voltage = false, rotor_acceleration = false, rotor_command = false,
+       rotor_radius = false;
   bool Has(FlightInput input) const;
 };
 const char* FlightInputName(FlightInput input);
 
-// The IMU signals at one sample: gyro w, its derivative w', accelerometer s.
+// The IMU signals at one sample: gyro w, its derivative w', accelerometer s; and the first two
+// derivatives of s (for effects that shift the accelerometer stream in time; zero in the
+// simulator, which shifts its streams itself).
 template <typename T>
 struct ImuSample {
   Eigen::Matrix<T, 3, 1> angular_velocity, angular_acceleration, specific_force;
+  Eigen::Matrix<T, 3, 1> specific_force_rate = Eigen::Matrix<T, 3, 1>::Zero();
+  Eigen::Matrix<T, 3, 1> specific_force_rate2 = Eigen::Matrix<T, 3, 1>::Zero();
+};
+
+// What a rotor-wrench effect sees at one sample, in F_d: the rotor speeds acting (after the
+// rotor-signal effects) and their rates, the body's angular velocity (corrected IMU) and the
+// velocity of O_d and the rotors' heights (zero or empty when the flight has none; an effect
+// needing them says so in its inputs).
+template <typename T>
+struct RotorSample {
+  const Vehicle* vehicle = nullptr;
+  Eigen::Matrix<T, Eigen::Dynamic, 1> speed, acceleration;  // |Omega_i| (rad/s), Omega_i' (rad/s^2)
+  Eigen::Matrix<T, 3, 1> angular_velocity = Eigen::Matrix<T, 3, 1>::Zero();
+  Eigen::Matrix<T, 3, 1> velocity = Eigen::Matrix<T, 3, 1>::Zero();
+  Eigen::Matrix<T, Eigen::Dynamic, 1> height;  // h_i of each rotor above the ground; empty without a pose
+};
+// What rotor-wrench effects change in the rotors' wrench: rotor i gives thrust kt f_i Omega_i^2 and
+// drag torque kd g_i Omega_i^2 (f = thrust_factor, g = torque_factor, 1 in the paper's model), and
+// `extra` is a wrench at O_d (N, N m) that does not scale with kt or kd. Effects compose by
+// multiplying factors and adding wrenches.
+template <typename T>
+struct RotorWrenchTerms {
+  Eigen::Matrix<T, Eigen::Dynamic, 1> thrust_factor, torque_factor;
+  Eigen::Matrix<T, 6, 1> extra = Eigen::Matrix<T, 6, 1>::Zero();
+  explicit RotorWrenchTerms(int rotors)
+      : thrust_factor(Eigen::Matrix<T, Eigen::Dynamic, 1>::Constant(rotors, T(1.0))),
+        torque_factor(Eigen::Matrix<T, Eigen::Dynamic, 1>::Constant(rotors, T(1.0))) {}
 };
 
 // The scalar types the library evaluates effect models with: the derivatives of IMU effects are
@@ -88,12 +120,16 @@ class EffectDescriptor {
     std::string name;            // "delay", as --effects takes it
     std::string parameter_name;  // "delay_s", as reports and --effect name=value write it
     std::string unit;            // SI unit of the parameter, "s"
+    // Names of the scalar parameters when each has its own (rotor_drag's two coefficients); else
+    // parameter_name with axis ("_x") or rotor ("_1") suffixes.
+    std::vector<std::string> labels;
     std::string meaning;         // one line: the model and its sign convention
     EffectStage stage = EffectStage::kImuSensor;
     // Place in the chain of its stage, from the physics (0) towards the log: the simulator applies
     // the stage's effects in increasing order, the model's correction in decreasing order.
     int chain_position = 0;
-    int dimension = 1;  // scalar parameters (a per-rotor effect overrides Dimension)
+    int dimension = 1;       // scalar parameters
+    bool per_rotor = false;  // one value per rotor instead ("_1" .. "_N"), dimension unused
     // Physical bounds per coordinate kept by the refinement; an estimate ending on a non-zero
     // bound is reported as such.
     double lower_bound = 0.0, upper_bound = 0.0;
@@ -113,6 +149,9 @@ class EffectDescriptor {
     std::string display_unit;
     // The flight signals its model needs (beyond gyro, accelerometer, rotor signal).
     std::vector<FlightInput> inputs;
+    // The values sum to zero (a per-rotor spread around a mean that a linear parameter already
+    // carries): the refinement pins the sum, and the simulator's draws are centred.
+    bool zero_sum = false;
     // Whether "all" (refine's and ablate's default, the diagnosis's candidates) includes it: false
     // for an effect that a parameter of the linear model mimics so closely that, on ordinary
     // flights, it runs to its bound or takes that parameter's value (used when named).
@@ -133,7 +172,7 @@ class EffectDescriptor {
   // Number of scalar parameters for this vehicle.
   virtual int Dimension(const Vehicle& vehicle) const;
   // Dimension without a vehicle, or -1 when it depends on one.
-  virtual int FixedDimension() const { return info_.dimension; }
+  virtual int FixedDimension() const { return info_.per_rotor ? -1 : info_.dimension; }
   // Labels of the scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.
   std::vector<std::string> Labels(int dimension) const;
   // The value formatted for people: "12.3 +- 0.4 ms", "(1, 2, 3) deg".
@@ -153,6 +192,12 @@ class EffectDescriptor {
   virtual void CorrectImu(const WideImuJet* p, ImuSample<WideImuJet>* sample) const;
   virtual void ApplyToSensor(const double* p, ImuSample<double>* sample) const;
 
+  // kRotorWrench: adds the effect's terms at one sample, for the model and the simulator alike.
+  virtual void AddRotorWrench(const double* p, const RotorSample<double>& sample, RotorWrenchTerms<double>* terms) const;
+  virtual void AddRotorWrench(const ImuJet* p, const RotorSample<ImuJet>& sample, RotorWrenchTerms<ImuJet>* terms) const;
+  virtual void AddRotorWrench(const WideImuJet* p, const RotorSample<WideImuJet>& sample,
+                              RotorWrenchTerms<WideImuJet>* terms) const;
+
   // kRotorSignal: one rotor's signal at the base rate (time step dt) -> what acts after this
   // effect, for the model; and the simulator's view of it: the delay it adds to the command and
   // the time constant of the first-order lag it adds between command and rotor.
@@ -160,6 +205,9 @@ class EffectDescriptor {
   virtual void TransformRotorSignal(const RotorJet* p, double dt, const Eigen::Matrix<RotorJet, -1, 1>& in,
                                     Eigen::Matrix<RotorJet, -1, 1>* out) const;
   virtual double SimulatedCommandDelay(const Eigen::VectorXd& /*value*/) const { return 0.0; }
+  // kImuSensor: the delay of the accelerometer stream behind the gyro's that the simulator applies
+  // to the whole series (its per-sample ApplyToSensor leaves the sample alone).
+  virtual double SimulatedAccelerometerDelay(const Eigen::VectorXd& /*value*/) const { return 0.0; }
   virtual double SimulatedMotorTimeConstant(const Eigen::VectorXd& /*value*/) const { return 0.0; }
   // The value that gives a rotor-signal effect about this delay of the rotor signal (the
   // diagnosis starts it from the coarse delay search), clamped into its bounds.
@@ -225,6 +273,8 @@ class Effects {
   bool IsZero(EffectKind kind) const;
   // True when every effect of the stage is absent.
   bool StageIsZero(EffectStage stage) const;
+  // True when every effect is absent.
+  bool AllZero() const;
   // Applies "name=value" or "name=x,y,z" (name in either form above). Throws rotorid::Error.
   void Assign(const std::string& assignment);
 
@@ -242,5 +292,12 @@ struct EffectChain {
 // The effects of `stage` that are non-zero in `effects` or listed in `also` (free ones, whose
 // derivative is wanted even at zero).
 EffectChain ActingEffects(const Effects& effects, EffectStage stage, const std::vector<EffectKind>& also = {});
+
+// The rotor-wrench effects' terms at one sample: parameters[j] are those of chain[j].
+template <typename T>
+void AddRotorWrench(const std::vector<EffectKind>& chain, const std::vector<const T*>& parameters,
+                    const RotorSample<T>& sample, RotorWrenchTerms<T>* terms) {
+  for (size_t j = 0; j < chain.size(); ++j) chain[j]->AddRotorWrench(parameters[j], sample, terms);
+}
 
 }  // namespace rotorid

@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 
 #include "rotorid/core/vehicle.h"
+#include "rotorid/model/effects.h"
 #include "rotorid/model/parameters.h"
 
 namespace rotorid {
@@ -61,20 +62,35 @@ Wrench<T> MassRegressor(const Vec3<T>& s) {
   return d;
 }
 
+// The paper's rotor model: every factor 1.
+struct UnitRotorFactors {
+  double operator[](int /*rotor*/) const { return 1.0; }
+};
+
+// D_k with the per-rotor factors of the rotor-wrench effects (rotorid/model/effects.h): rotor i's
+// Omega_i^2 counts f_i times in the thrust column and g_i times in the drag-torque column.
+template <typename T, typename Derived, typename Factors>
+Eigen::Matrix<T, 6, kNumRotorCoefficients> RotorRegressor(const Eigen::MatrixBase<Derived>& omega,
+                                                          const Vehicle& vehicle, const Factors& thrust_factor,
+                                                          const Factors& torque_factor) {
+  Eigen::Matrix<T, 6, kNumRotorCoefficients> d = Eigen::Matrix<T, 6, kNumRotorCoefficients>::Zero();
+  for (int i = 0; i < vehicle.num_rotors(); ++i) {
+    const T omega_sq = T(omega[i]) * T(omega[i]);
+    const T thrust = thrust_factor[i] * omega_sq;
+    const Eigen::Vector3d& p = vehicle.rotors[i].position_m;
+    d(2, 0) += thrust;
+    d(3, 0) += p.y() * thrust;
+    d(4, 0) -= p.x() * thrust;
+    d(5, 1) -= double(vehicle.rotors[i].spin) * torque_factor[i] * omega_sq;
+  }
+  return d;
+}
+
 // D_k (6x2) from the rotor speeds |Omega_i| (rad/s): columns for kt and kd.
 template <typename T, typename Derived>
 Eigen::Matrix<T, 6, kNumRotorCoefficients> RotorRegressor(const Eigen::MatrixBase<Derived>& omega,
                                                           const Vehicle& vehicle) {
-  Eigen::Matrix<T, 6, kNumRotorCoefficients> d = Eigen::Matrix<T, 6, kNumRotorCoefficients>::Zero();
-  for (int i = 0; i < vehicle.num_rotors(); ++i) {
-    const T omega_sq = T(omega[i]) * T(omega[i]);
-    const Eigen::Vector3d& p = vehicle.rotors[i].position_m;
-    d(2, 0) += omega_sq;
-    d(3, 0) += p.y() * omega_sq;
-    d(4, 0) -= p.x() * omega_sq;
-    d(5, 1) -= double(vehicle.rotors[i].spin) * omega_sq;
-  }
-  return d;
+  return RotorRegressor<T>(omega, vehicle, UnitRotorFactors{}, UnitRotorFactors{});
 }
 
 // Number of columns of one configuration's IDIM row block: [-D_k | D | m D_m].
@@ -90,6 +106,16 @@ Eigen::Matrix<T, 6, kNumIdimColumns> IdimRows(const Vec3<T>& w, const Vec3<T>& w
   rows.template block<6, kNumBodyParameters>(0, kNumRotorCoefficients) = BodyRegressor<T>(w, w_dot, s);
   rows.template rightCols<1>() = T(vehicle.mass_kg) * MassRegressor<T>(s);
   return rows;
+}
+
+// The rows with the rotor-wrench effects' terms: the rotor columns with their per-rotor factors, and
+// the extra wrench in the known column (e = rigid-body wrench - rotor wrench - extra).
+template <typename T, typename Derived>
+void ApplyRotorWrenchTerms(const Eigen::MatrixBase<Derived>& omega, const Vehicle& vehicle,
+                           const RotorWrenchTerms<T>& terms, Eigen::Matrix<T, 6, kNumIdimColumns>* rows) {
+  rows->template leftCols<kNumRotorCoefficients>() =
+      -RotorRegressor<T>(omega, vehicle, terms.thrust_factor, terms.torque_factor);
+  rows->template rightCols<1>() -= terms.extra;
 }
 
 // Newton-Euler wrench needed at O_d for the motion (s, w, w') of a body with these parameters.
@@ -123,6 +149,15 @@ template <typename T, typename Derived>
 Wrench<T> RotorWrench(const Eigen::MatrixBase<Derived>& omega, T kt, T kd, const Vehicle& vehicle) {
   const Eigen::Matrix<T, 6, kNumRotorCoefficients> d = RotorRegressor<T>(omega, vehicle);
   return d.col(0) * kt + d.col(1) * kd;
+}
+
+// The rotors' wrench with the rotor-wrench effects' terms (the simulator's forward physics).
+template <typename T, typename Derived>
+Wrench<T> RotorWrench(const Eigen::MatrixBase<Derived>& omega, T kt, T kd, const Vehicle& vehicle,
+                      const RotorWrenchTerms<T>& terms) {
+  const Eigen::Matrix<T, 6, kNumRotorCoefficients> d =
+      RotorRegressor<T>(omega, vehicle, terms.thrust_factor, terms.torque_factor);
+  return d.col(0) * kt + d.col(1) * kd + terms.extra;
 }
 
 }  // namespace rotorid

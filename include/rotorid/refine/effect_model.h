@@ -40,7 +40,27 @@ ImuSample<T> LoggedImu(const ProcessedFlight& flight, int i) {
   s.angular_velocity = flight.angular_velocity.row(i).transpose().cast<T>();
   s.angular_acceleration = flight.angular_acceleration.row(i).transpose().cast<T>();
   s.specific_force = flight.specific_force.row(i).transpose().cast<T>();
+  if (i < flight.specific_force_rate2.rows()) {  // flights assembled by hand may lack them
+    s.specific_force_rate = flight.specific_force_rate.row(i).transpose().cast<T>();
+    s.specific_force_rate2 = flight.specific_force_rate2.row(i).transpose().cast<T>();
+  }
   return s;
+}
+
+// What the rotor-wrench effects see at sample i of a flight: the rotor speeds acting `speed` (with
+// the rotor-signal effects), the corrected angular velocity `w`, the flight's rotor acceleration
+// velocity of O_d and rotor heights (zero or empty where the flight has none).
+template <typename T>
+RotorSample<T> FlightRotorSample(const ProcessedFlight& flight, int i, const Eigen::Matrix<T, Eigen::Dynamic, 1>& speed,
+                                 const Eigen::Matrix<T, 3, 1>& w) {
+  RotorSample<T> sample;
+  sample.vehicle = &flight.vehicle;
+  sample.speed = speed;
+  sample.acceleration = flight.rotor_acceleration.row(i).transpose().cast<T>();
+  sample.angular_velocity = w;
+  if (flight.velocity_mps) sample.velocity = flight.velocity_mps->row(i).transpose().cast<T>();
+  if (flight.rotor_height_m) sample.height = flight.rotor_height_m->row(i).transpose().cast<T>();
+  return sample;
 }
 
 // Corrects an IMU sample from the log to the body at O_b: parameters[j] are those of chain[j]

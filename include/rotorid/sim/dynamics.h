@@ -17,6 +17,7 @@
 #include <functional>
 
 #include "rotorid/core/vehicle.h"
+#include "rotorid/model/effects.h"
 #include "rotorid/model/parameters.h"
 
 namespace rotorid {
@@ -41,13 +42,19 @@ class MultirotorDynamics {
 
   // gravity_mps2 >= 0 is g in g_w = [0, 0, -g]; motor_time_constant_s >= 0. A vehicle without rotors is
   // allowed (a free body). Throws rotorid::Error when the spatial inertia is not positive definite.
+  // `rotor_wrench`: the rotor-wrench effects acting (rotorid/model/effects.h), the same models the
+  // identification corrects for.
   MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                     double motor_time_constant_s);
+                     double motor_time_constant_s, EffectChain rotor_wrench = {});
 
   // The rotor speeds acting at time t: the lag state, or the command itself when motor_time_constant_s = 0.
   Eigen::VectorXd ActingRotorSpeeds(double t_s, const SimState& state, const RotorCommand& command) const;
-  // s and w' of the body in `state` under the rotor wrench of these rotor speeds.
-  BodyAcceleration Accelerations(const SimState& state, const Eigen::VectorXd& rotor_speed_radps) const;
+  // Their rates Omega_i': the lag's, or the slope of the (piecewise-linear) command.
+  Eigen::VectorXd ActingRotorRates(double t_s, const SimState& state, const RotorCommand& command) const;
+  // s and w' of the body in `state` under the rotor wrench of these rotor speeds and rates (rates
+  // matter only to rotor-wrench effects; empty: zero).
+  BodyAcceleration Accelerations(const SimState& state, const Eigen::VectorXd& rotor_speed_radps,
+                                 const Eigen::VectorXd& rotor_rate_radps2 = {}) const;
   // One classical Runge-Kutta (RK4) step of h seconds from t; the rotor lag is part of the state,
   // the quaternion is renormalised after the step.
   SimState Step(double t_s, const SimState& state, double h_s, const RotorCommand& command) const;
@@ -67,6 +74,7 @@ class MultirotorDynamics {
   VehicleParameters parameters_;
   Eigen::Vector3d gravity_w_;
   double motor_time_constant_s_;
+  EffectChain rotor_wrench_;
 };
 
 // Torque-free motion (no gravity, no rotors) of a body with mass, first moment and inertia at O_d,

@@ -57,6 +57,8 @@ struct SimulationOptions {
   double jitter_s = 0.0;
   // Scale of the pilot's references: 1 = the paper-like flight, 0 = hover.
   double excitation = 1.0;
+  // Height of O_d above the ground (z = 0) the pilot hovers about (m): low for the ground effect.
+  double hover_altitude_m = 1.5;
   // Logged hover at the start before the pilot's references fade in (over 2 s).
   double hover_lead_in_s = 1.0;
   // Unlogged flight before t = 0 so that the controller has settled when the log starts.

@@ -1,0 +1,56 @@
+// `rotor_inertia` (INTERFACE.md, "Effects of real vehicles (v2)"): each rotor's angular momentum
+// J sigma_i Omega_i z reacts on the body when the rotor speeds up and when the body turns it:
+//   tau = -J sum_i sigma_i (Omega_i' z + Omega_i w x z),   J = rotor_inertia_kgm2 >= 0
+// (rotor and propeller about the rotor axis). Omega_i' is the derivative of the filtered rotor
+// speed of the flight (before any rotor-signal effect: a delay shifts it by a few ms, which a
+// term this small does not notice).
+
+#include "model/effect_adapter.h"
+#include "rotorid/core/vehicle.h"
+
+namespace rotorid::internal {
+namespace {
+
+struct RotorInertiaModel {
+  template <typename T>
+  static void Add(const T* p, const RotorSample<T>& s, RotorWrenchTerms<T>* terms) {
+    const Vehicle& vehicle = *s.vehicle;
+    T momentum(0.0), momentum_rate(0.0);  // sum_i sigma_i Omega_i and its derivative
+    for (int i = 0; i < vehicle.num_rotors(); ++i) {
+      const double spin = vehicle.rotors[i].spin;
+      momentum += spin * s.speed[i];
+      momentum_rate += spin * s.acceleration[i];
+    }
+    // w x z = (w_y, -w_x, 0).
+    terms->extra[3] -= p[0] * momentum * s.angular_velocity.y();
+    terms->extra[4] += p[0] * momentum * s.angular_velocity.x();
+    terms->extra[5] -= p[0] * momentum_rate;
+  }
+};
+
+}  // namespace
+
+const EffectDescriptor& RotorInertiaEffect() {
+  static const RotorWrenchEffect<RotorInertiaModel> effect([] {
+    EffectDescriptor::Info i;
+    i.name = "rotor_inertia";
+    i.parameter_name = "rotor_inertia_kgm2";
+    i.unit = "kg m^2";
+    i.meaning = "tau = -J sum_i sigma_i (Omega_i' z + Omega_i w x z), J = rotor_inertia_kgm2 >= 0";
+    i.stage = EffectStage::kRotorWrench;
+    i.chain_position = 2;
+    i.dimension = 1;
+    i.lower_bound = 0.0;
+    i.upper_bound = 1e-3;  // a 20-inch propeller's is ~1e-4
+    // The paper's vehicle's 10-inch propellers with their motor bells.
+    i.draw = {DrawShape::kUniform, 2e-5, 6e-5};
+    i.simulator_limit = {true, 0.0, 1e-3};
+    i.settle_tolerance = 1e-9;
+    i.display_unit = "kg m^2";
+    i.inputs = {FlightInput::kRotorAcceleration};
+    return i;
+  }());
+  return effect;
+}
+
+}  // namespace rotorid::internal

@@ -1,0 +1,48 @@
+// `rotor_thrust_scale` (INTERFACE.md, "Effects of real vehicles (v2)"): propellers and motors
+// differ, so rotor i gives thrust kt (1 + s_i) Omega_i^2 and drag torque kd (1 + s_i) Omega_i^2.
+// One value per rotor, summing to zero: their mean is kt's and kd's (the refinement pins the sum).
+
+#include "model/effect_adapter.h"
+#include "rotorid/core/vehicle.h"
+
+namespace rotorid::internal {
+namespace {
+
+struct RotorThrustScaleModel {
+  template <typename T>
+  static void Add(const T* p, const RotorSample<T>& s, RotorWrenchTerms<T>* terms) {
+    for (int i = 0; i < s.vehicle->num_rotors(); ++i) {
+      terms->thrust_factor[i] *= T(1.0) + p[i];
+      terms->torque_factor[i] *= T(1.0) + p[i];
+    }
+  }
+};
+
+}  // namespace
+
+const EffectDescriptor& RotorThrustScaleEffect() {
+  static const RotorWrenchEffect<RotorThrustScaleModel> effect([] {
+    EffectDescriptor::Info i;
+    i.name = "rotor_thrust_scale";
+    i.parameter_name = "rotor_thrust_scale";
+    i.unit = "1";
+    i.meaning = "rotor i: thrust kt (1 + s_i) Omega_i^2, drag torque kd (1 + s_i) Omega_i^2, sum s_i = 0";
+    i.stage = EffectStage::kRotorWrench;
+    i.chain_position = 0;
+    i.per_rotor = true;
+    i.zero_sum = true;
+    i.lower_bound = -0.5;
+    i.upper_bound = 0.5;
+    i.draw = {DrawShape::kUniform, -0.03, 0.03};  // a few percent between propellers of one batch
+    i.simulator_limit = {true, -0.3, 0.3};
+    i.settle_tolerance = 1e-5;
+    i.display_scale = 1e2;
+    i.display_unit = "%";
+    // Its spread is a property of the vehicle, not of a flight's timing or IMU: used when named.
+    i.default_candidate = false;
+    return i;
+  }());
+  return effect;
+}
+
+}  // namespace rotorid::internal

@@ -1,0 +1,233 @@
+// The effects of real vehicles (INTERFACE.md, "Effects of real vehicles (v2)") beyond the lever
+// arm: their models against INTERFACE.md's formulas, simulated flights recovered by the
+// refinement, and the independent simulator's flights read the same way.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "rotorid/core/vehicle.h"
+#include "rotorid/io/flight_csv.h"
+#include "rotorid/io/vehicle_yaml.h"
+#include "rotorid/model/effects.h"
+#include "rotorid/refine/refine.h"
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+#include "rotorid/sim/truth.h"
+#include "support/test_support.h"
+
+namespace rotorid {
+namespace {
+
+EffectKind Kind(const std::string& name) { return ParseEffectKind(name); }
+
+Vehicle PaperVehicle() { return PresetVehicle("A").vehicle; }
+
+RotorSample<double> GenericSample(const Vehicle& vehicle) {
+  RotorSample<double> s;
+  s.vehicle = &vehicle;
+  s.speed = Eigen::Vector4d(900.0, 950.0, 1000.0, 1050.0);
+  s.acceleration = Eigen::Vector4d(300.0, -200.0, 500.0, -100.0);
+  s.angular_velocity = Eigen::Vector3d(0.4, -0.7, 1.1);
+  s.velocity = Eigen::Vector3d(2.0, -1.0, 0.5);
+  s.height = Eigen::Vector4d(0.2, 0.25, 0.3, 0.35);
+  return s;
+}
+
+TEST(RealVehicleEffectsTest, DescribeThemselvesWithTheInterfaceNames) {
+  const Vehicle vehicle = PaperVehicle();
+  EXPECT_EQ(Kind("rotor_drag")->Labels(Kind("rotor_drag")->Dimension(vehicle)),
+            (std::vector<std::string>{"rotor_drag_coefficient", "flapping_moment_coefficient"}));
+  EXPECT_EQ(Kind("rotor_inertia_kgm2")->name(), "rotor_inertia");
+  EXPECT_EQ(Kind("rotor_thrust_scale")->Dimension(vehicle), 4);
+  EXPECT_EQ(Kind("rotor_thrust_scale")->FixedDimension(), -1);
+  EXPECT_EQ(Kind("rotor_thrust_scale")->Labels(4)[3], "rotor_thrust_scale_4");
+  EXPECT_EQ(Kind("acc_delay_s")->name(), "acc_delay");
+  EXPECT_EQ(Kind("ground_effect_coefficient")->name(), "ground_effect");
+  FlightInputs none;
+  EXPECT_NE(Kind("rotor_drag")->Unavailable(none).find("velocity"), std::string::npos);
+  EXPECT_NE(Kind("ground_effect")->Unavailable(none).find("rotor_radius"), std::string::npos);
+}
+
+// rotor_drag and rotor_inertia add INTERFACE.md's wrenches, written out here independently.
+TEST(RealVehicleEffectsTest, WrenchesAreTheInterfaceFormulas) {
+  const Vehicle vehicle = PaperVehicle();
+  const RotorSample<double> s = GenericSample(vehicle);
+  const double kd = 3e-5, kf = 2e-6, j = 4e-5;
+  Eigen::Matrix<double, 6, 1> expected = Eigen::Matrix<double, 6, 1>::Zero();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d p = vehicle.rotors[i].position_m;
+    const Eigen::Vector3d v = s.velocity + s.angular_velocity.cross(p);
+    const Eigen::Vector3d v_perp = v - v.dot(z) * z;
+    const Eigen::Vector3d f = -kd * std::abs(s.speed[i]) * v_perp;
+    expected.head<3>() += f;
+    expected.tail<3>() += p.cross(f) - kf * std::abs(s.speed[i]) * z.cross(v_perp);
+    const double sigma = vehicle.rotors[i].spin;
+    expected.tail<3>() -= j * sigma * (s.acceleration[i] * z + s.speed[i] * s.angular_velocity.cross(z));
+  }
+  RotorWrenchTerms<double> terms(4);
+  const Eigen::Vector2d drag(kd, kf);
+  Kind("rotor_drag")->AddRotorWrench(drag.data(), s, &terms);
+  Kind("rotor_inertia")->AddRotorWrench(&j, s, &terms);
+  EXPECT_LT((terms.extra - expected).norm(), 1e-12 * expected.norm());
+  EXPECT_EQ(terms.thrust_factor, Eigen::Vector4d::Ones());
+}
+
+// rotor_thrust_scale scales thrust and torque of each rotor; ground_effect the thrust alone.
+TEST(RealVehicleEffectsTest, FactorsAreTheInterfaceFormulas) {
+  const Vehicle vehicle = PaperVehicle();
+  const RotorSample<double> s = GenericSample(vehicle);
+  RotorWrenchTerms<double> terms(4);
+  const Eigen::Vector4d scale(0.03, -0.02, -0.03, 0.02);
+  const double rho = 1.0;
+  Kind("rotor_thrust_scale")->AddRotorWrench(scale.data(), s, &terms);
+  Kind("ground_effect")->AddRotorWrench(&rho, s, &terms);
+  for (int i = 0; i < 4; ++i) {
+    const double ratio = 0.127 / (4.0 * s.height[i]);
+    EXPECT_NEAR(terms.thrust_factor[i], (1.0 + scale[i]) / (1.0 - rho * ratio * ratio), 1e-12) << i;
+    EXPECT_NEAR(terms.torque_factor[i], 1.0 + scale[i], 1e-12) << i;
+  }
+  EXPECT_EQ(terms.extra, (Eigen::Matrix<double, 6, 1>::Zero()));
+}
+
+// The accelerometer delay's correction undoes a delay of a smooth signal to second order.
+TEST(RealVehicleEffectsTest, AccDelayCorrectionShiftsTheAccelerometerBack) {
+  const double d = 0.004, f = 3.0, w = 2 * M_PI * f, t = 0.37;
+  auto signal = [&](double time) { return std::sin(w * time); };
+  ImuSample<double> sample;
+  sample.angular_velocity.setZero();
+  sample.angular_acceleration.setZero();
+  // The log at t holds s(t - d); its derivatives are the log's.
+  sample.specific_force = Eigen::Vector3d::Constant(signal(t - d));
+  sample.specific_force_rate = Eigen::Vector3d::Constant(w * std::cos(w * (t - d)));
+  sample.specific_force_rate2 = Eigen::Vector3d::Constant(-w * w * std::sin(w * (t - d)));
+  Kind("acc_delay")->CorrectImu(&d, &sample);
+  EXPECT_NEAR(sample.specific_force[0], signal(t), std::pow(w * d, 3) / 6 * 1.01);
+}
+
+SimulationResult SimulateWith(const Effects& effects, std::uint64_t seed, double seconds = 60.0,
+                              double hover_altitude_m = 1.5) {
+  const SimulationVehicle vehicle = PresetVehicle("A");
+  SimulationOptions options;
+  options.duration_s = seconds;
+  options.seed = seed;
+  options.effects = effects;
+  options.mocap = true;
+  options.hover_altitude_m = hover_altitude_m;
+  return Simulate(vehicle.vehicle, vehicle.parameters, options);
+}
+
+RefineResult RefineWith(const IdentificationResult& linear, const std::vector<std::string>& names) {
+  RefineOptions options;
+  options.effects.clear();
+  for (const std::string& name : names) options.effects.push_back(Kind(name));
+  return Refine(linear, options);
+}
+
+// Each effect alone on rotorid's simulator, refined by name: recovered within issue 12's
+// tolerances (drag coefficients 10 %, rotor inertia 15 %, thrust scales 0.01, acc_delay 1 ms,
+// ground effect 20 %) and within 3 std.
+struct SimulatedCase {
+  std::string effect;
+  Eigen::VectorXd value;
+  double tolerance;  // absolute, per coordinate
+  double hover_altitude_m = 1.5;
+};
+
+void PrintTo(const SimulatedCase& c, std::ostream* out) { *out << c.effect; }
+
+class SimulatedRecoveryTest : public ::testing::TestWithParam<SimulatedCase> {};
+
+TEST_P(SimulatedRecoveryTest, RefinementRecoversTheInjectedValue) {
+  const SimulatedCase& c = GetParam();
+  Effects effects;
+  effects.Set(Kind(c.effect), c.value);
+  const SimulationResult sim = SimulateWith(effects, 5, 60.0, c.hover_altitude_m);
+  const IdentificationResult linear = testing::IdentifySimulated(sim);
+  const RefineResult refined = RefineWith(linear, {c.effect});
+  const Eigen::VectorXd got = refined.effects.Get(Kind(c.effect));
+  const Eigen::VectorXd std_dev = refined.effects_std.Get(Kind(c.effect));
+  ASSERT_EQ(got.size(), c.value.size());
+  for (Eigen::Index k = 0; k < got.size(); ++k) {
+    EXPECT_NEAR(got[k], c.value[k], c.tolerance) << c.effect << " " << k;
+    if (std_dev.size() == got.size() && refined.has_covariance) {
+      EXPECT_NEAR(got[k], c.value[k], 3 * std_dev[k] + 1e-12) << c.effect << " " << k << ", std " << std_dev[k];
+    }
+  }
+  EXPECT_TRUE(refined.has_covariance);
+}
+
+Eigen::VectorXd Values(std::initializer_list<double> v) {
+  return Eigen::Map<const Eigen::VectorXd>(v.begin(), static_cast<Eigen::Index>(v.size()));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Effects, SimulatedRecoveryTest,
+    ::testing::Values(SimulatedCase{"rotor_drag", Values({4e-5, 6e-6}), 0.1 * 4e-5},
+                      SimulatedCase{"rotor_inertia", Values({3e-6}), 0.15 * 3e-6},
+                      SimulatedCase{"rotor_thrust_scale", Values({0.03, -0.02, -0.03, 0.02}), 0.01},
+                      SimulatedCase{"acc_delay", Values({0.005}), 0.001},
+                      SimulatedCase{"ground_effect", Values({1.0}), 0.2, 0.3}),
+    [](const auto& test_info) { return test_info.param.effect; });
+
+// The independent simulator's flights (../shared/data/independent-sim), each with one effect:
+// the refinement with that effect named finds the value its truth file holds.
+struct IndependentCase {
+  std::string flight, effect;
+  double tolerance;  // absolute, per coordinate
+};
+
+void PrintTo(const IndependentCase& c, std::ostream* out) { *out << c.flight; }
+
+class IndependentSimTest : public ::testing::TestWithParam<IndependentCase> {};
+
+TEST_P(IndependentSimTest, RefinementReadsTheEffectAsTheOtherSimulatorDefinesIt) {
+  const IndependentCase& c = GetParam();
+  const auto dir = testing::SharedDataPath("independent-sim");
+  if (!dir) GTEST_SKIP() << "../shared/data/independent-sim is absent";
+  const std::string base = *dir + "/" + c.flight;
+  const Vehicle vehicle = ReadVehicleYaml(base + ".yaml");
+  const FlightLog log = ReadFlightCsv(base + ".csv", vehicle.num_rotors());
+  const SimulationTruth truth = ReadTruthJson(base + "_truth.json");
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  const IdentificationResult linear = Identify({{vehicle, log, 1.0}}, identify);
+  const RefineResult refined = RefineWith(linear, {c.effect});
+  const Eigen::VectorXd got = refined.effects.Get(Kind(c.effect));
+  const Eigen::VectorXd want = truth.effects.Get(Kind(c.effect));
+  ASSERT_EQ(got.size(), want.size());
+  for (Eigen::Index k = 0; k < got.size(); ++k) EXPECT_NEAR(got[k], want[k], c.tolerance) << c.effect << " " << k;
+}
+
+INSTANTIATE_TEST_SUITE_P(Flights, IndependentSimTest,
+                         ::testing::Values(IndependentCase{"A_rotor_drag", "rotor_drag", 0.2e-5},
+                                           IndependentCase{"A_ground_effect", "ground_effect", 0.2},
+                                           IndependentCase{"CF_acc_delay", "acc_delay", 0.001}),
+                         [](const auto& test_info) { return test_info.param.flight; });
+
+// The independent simulator's thrust scales (0.03, -0.02, -0.03, 0.02) on the plus quad: the
+// differences within each pair of opposite rotors (1-2 rolls, 3-4 pitches) are recovered within
+// 0.01. The difference between the pairs shows only in the yaw torque, and the linear step discards
+// kd on this flight (the scales spoil the yaw equation it fits without them): that combination is
+// not held to the truth here (docs/adding_an_effect.md, Status).
+TEST(IndependentSimThrustScaleTest, ScalesOfOppositeRotorsAreToldApart) {
+  const auto dir = testing::SharedDataPath("independent-sim");
+  if (!dir) GTEST_SKIP() << "../shared/data/independent-sim is absent";
+  const std::string base = *dir + "/A_rotor_thrust_scale";
+  const Vehicle vehicle = ReadVehicleYaml(base + ".yaml");
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  const IdentificationResult linear =
+      Identify({{vehicle, ReadFlightCsv(base + ".csv", vehicle.num_rotors()), 1.0}}, identify);
+  const Eigen::VectorXd s = RefineWith(linear, {"rotor_thrust_scale"}).effects.Get(Kind("rotor_thrust_scale"));
+  const Eigen::VectorXd truth = ReadTruthJson(base + "_truth.json").effects.Get(Kind("rotor_thrust_scale"));
+  ASSERT_EQ(s.size(), 4);
+  EXPECT_NEAR(s[0] - s[1], truth[0] - truth[1], 0.01);
+  EXPECT_NEAR(s[2] - s[3], truth[2] - truth[3], 0.01);
+  EXPECT_NEAR(s.sum(), 0.0, 1e-5);
+}
+
+}  // namespace
+}  // namespace rotorid
