@@ -270,6 +270,12 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   options.candidates.clear();
   std::vector<EffectVerdict> unavailable;  // ranked last, with the reason
   for (EffectKind kind : requested.candidates) {
+    // Its folds and linearised steps keep every effect at a size known without the vehicle.
+    if (kind->FixedDimension() < 0)
+      throw Error("diagnose: " + kind->name() +
+                  " has one value per rotor, which the diagnosis does not take yet; refine it by name (rotorid "
+                  "refine --effects " +
+                  kind->name() + ")");
     std::string reason;
     for (size_t f = 0; f < flights.size() && reason.empty(); ++f)
       if (const std::string why = kind->Unavailable(flights[f].inputs()); !why.empty())

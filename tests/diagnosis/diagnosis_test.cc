@@ -94,6 +94,18 @@ TEST(DiagnosisTest, DelayPlusLagIsReportedAsConfoundedWithWhatTheDataFix) {
   EXPECT_NEAR(value, 0.025, 0.004) << DiagnosisVerdict(d);
 }
 
+// A per-rotor effect is refused with the reason (it used to crash the fold fits).
+TEST(DiagnosisTest, PerRotorCandidateIsRefusedByName) {
+  DiagnosisOptions options = TestOptions();
+  options.candidates = {ParseEffectKind("rotor_thrust_scale")};
+  try {
+    Diagnose({SimulatedFlight(10.0, 23, Effects{})}, {}, options);
+    FAIL() << "diagnose took a per-rotor candidate";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rotor_thrust_scale has one value per rotor"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 23, Effects{})}, {}, TestOptions());
   EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);
