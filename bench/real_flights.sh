@@ -71,4 +71,9 @@ if [ -f "$IMRC/brushed/raw/jana01" ]; then
     run "refine jana04 $signal delay+lag" refine --vehicle data/vehicles/crazyflie21_brushed.yaml --log "$IMRC/brushed/raw/jana04" \
       --allow-partial --rotor-signal $signal --effects delay,motor_lag
   done
+  # The effects of real vehicles (docs/real_flights.md, "The effects of real vehicles on the Crazyflies"); the velocity is the pose estimate's.
+  for f in jana00 jana01 jana04 jana06; do
+    run "refine $f rpm v2 effects" refine --vehicle data/vehicles/crazyflie21_brushed.yaml --log "$IMRC/brushed/raw/$f" \
+      --allow-partial --effects delay,motor_lag,rotor_drag,rotor_inertia,acc_delay
+  done
 fi
