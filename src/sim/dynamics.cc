@@ -48,8 +48,8 @@ Eigen::VectorXd MultirotorDynamics::ActingRotorRates(double t_s, const SimState&
                                                      const RotorCommand& command) const {
   if (vehicle_.rotors.empty()) return Eigen::VectorXd();
   if (motor_time_constant_s_ > 0.0) return (command(t_s) - state.rotor_speed_radps) / motor_time_constant_s_;
-  // The command is linear between its kinks; the integrator's steps end on them, so the one-sided
-  // slope into the step is the one acting.
+  // The command is linear between its kinks and the integrator's steps end on them: the forward
+  // slope is the step's own, except at a step's last RK4 stage, which sees the next one's.
   constexpr double kProbe = 1e-7;
   return (command(t_s + kProbe) - command(t_s)) / kProbe;
 }
@@ -115,7 +115,10 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   // keeps the raw q so that the step stays a plain RK4 step.
   const Eigen::Matrix3d r_wb = state.attitude_wb.normalized().toRotationMatrix();
   const Eigen::VectorXd acting = ActingRotorSpeeds(t_s, state, command);
-  const Eigen::VectorXd rates = ActingRotorRates(t_s, state, command);
+  // The rates: the lag's state derivative, and what rotor-wrench effects see (else not needed).
+  const Eigen::VectorXd rates = motor_time_constant_s_ > 0.0 || !rotor_wrench_.kinds.empty()
+                                    ? ActingRotorRates(t_s, state, command)
+                                    : Eigen::VectorXd();
   const BodyAcceleration acc = Accelerations(state, acting, rates);
 
   Eigen::VectorXd dx(x.size());
