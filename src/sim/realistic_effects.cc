@@ -37,6 +37,8 @@ Effects DrawRealisticEffects(const std::vector<EffectKind>& kinds, RandomStream*
         break;
       }
     }
+    // A zero-sum effect's mean is a linear parameter's (kt's): draw the spread around it.
+    if (kind->info().zero_sum && value.size() > 0) value.array() -= value.mean();
     e.Set(kind, value);
   }
   return e;

@@ -49,6 +49,14 @@ TEST(RealisticEffectsTest, DrawsWithinTheRangesAndOnlyWhatIsAsked) {
   EXPECT_TRUE(delay_only.Get("acc_bias").isZero());
   EXPECT_TRUE(delay_only.Get("gyro_bias").isZero());
   EXPECT_TRUE(delay_only.Get("misalignment_rad").isZero());
+
+  // Per-rotor thrust scales: one per rotor, spread within the range, summing to zero.
+  const Effects scales = DrawRealisticEffects({ParseEffectKind("rotor_thrust_scale")}, &random, 6);
+  const Eigen::VectorXd s = scales.Get("rotor_thrust_scale");
+  ASSERT_EQ(s.size(), 6);
+  EXPECT_NEAR(s.sum(), 0.0, 1e-15);
+  EXPECT_GT(s.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LE(s.cwiseAbs().maxCoeff(), 0.06);
 }
 
 // A study is repeatable: the same seed and kinds give the same effects; other kinds, another stream.
