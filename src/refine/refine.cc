@@ -299,6 +299,9 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
     effect_blocks.scale.push_back(RefineScale(kind));
     Eigen::VectorXd v = start.Get(kind);
     if (v.size() == 0) v = Eigen::VectorXd::Zero(kind->Dimension(vehicle));
+    if (v.size() != kind->Dimension(vehicle))
+      throw Error(kind->parameter_name() + " takes " + std::to_string(kind->Dimension(vehicle)) +
+                  " value(s) for this vehicle, got " + std::to_string(v.size()));
     effect_values.push_back(v / effect_blocks.scale.back());
   }
 

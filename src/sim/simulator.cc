@@ -246,6 +246,11 @@ void AddDelayedAccelerometer(const std::vector<double>& times, const std::vector
 SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error("simulation options: " + problem);
   if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error("simulated vehicle: " + problem);
+  for (EffectKind kind : AllEffects())
+    if (const Eigen::VectorXd v = options.effects.Get(kind); v.size() > 0 && v.size() != kind->Dimension(vehicle))
+      throw Error("simulation options: " + kind->parameter_name() + " takes " +
+                  std::to_string(kind->Dimension(vehicle)) + " value(s) for this vehicle, got " +
+                  std::to_string(v.size()));
   if (!(truth.rotor.kt > 0.0) || !(truth.rotor.kd > 0.0) || !std::isfinite(truth.rotor.kt) ||
       !std::isfinite(truth.rotor.kd))
     throw Error("simulated vehicle: kt and kd must be positive");

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "rotorid/core/error.h"
 #include "rotorid/core/vehicle.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/io/vehicle_yaml.h"
@@ -105,6 +106,22 @@ TEST(RealVehicleEffectsTest, AccDelayCorrectionShiftsTheAccelerometerBack) {
   sample.specific_force_rate2 = Eigen::Vector3d::Constant(-w * w * std::sin(w * (t - d)));
   Kind("acc_delay")->CorrectImu(&d, &sample);
   EXPECT_NEAR(sample.specific_force[0], signal(t), std::pow(w * d, 3) / 6 * 1.01);
+}
+
+// A per-rotor value with the wrong count is refused by name, not read past its end.
+TEST(RealVehicleEffectsTest, PerRotorValueOfTheWrongSizeIsRefused) {
+  Effects effects;
+  effects.Set(Kind("rotor_thrust_scale"), Eigen::Vector2d(0.01, -0.01));
+  const SimulationVehicle vehicle = PresetVehicle("A");
+  SimulationOptions options;
+  options.duration_s = 1.0;
+  options.effects = effects;
+  try {
+    Simulate(vehicle.vehicle, vehicle.parameters, options);
+    FAIL() << "a 2-value thrust scale was simulated on a quad";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rotor_thrust_scale takes 4 value(s)"), std::string::npos) << e.what();
+  }
 }
 
 SimulationResult SimulateWith(const Effects& effects, std::uint64_t seed, double seconds = 60.0,
