@@ -59,7 +59,6 @@ Command AddAblateCommand(CLI::App& root) {
   command.app->add_option("--threads", options->threads, "subsets refined in parallel")->capture_default_str();
   command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
-    ParseEffectList(options->effects);  // a misspelt name fails before the flights are read
     const FlightSourceOptions source = SourceOptions(options->identify);
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
