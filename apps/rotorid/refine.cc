@@ -76,6 +76,12 @@ Command AddRefineCommand(CLI::App& root) {
       ->capture_default_str();
   command.app->add_option("--init", options->initial, "initial value of an effect parameter, e.g. delay_s=0.01");
   command.app->add_option("--robust-loss", options->refine.robust_loss, "none, huber or cauchy")->capture_default_str();
+  command.app
+      ->add_option("--criterion", options->refine.criterion,
+                   "tls, or anchored: moment rows divided by the rotor-signal effects' gain on the rotor moment, so that a "
+                   "lag cannot win by attenuating it (MODEL.md 9)")
+      ->check(CLI::IsMember({"anchored", "tls"}))
+      ->capture_default_str();
   command.app->add_option("--robust-scale", options->refine.robust_scale, "scale of the robust loss (whitened units)")
       ->capture_default_str();
   command.app->add_flag("!--no-delay-search", options->refine.coarse_delay_search,

@@ -1,6 +1,7 @@
 #include "refine/idim_residual.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "refine/effect_rows.h"
 #include "rotorid/ident/tls.h"
@@ -13,6 +14,32 @@ Effects EffectBlocks::At(double const* const* parameters, const Vehicle& vehicle
   for (size_t j = 0; j < free.size(); ++j)
     effects.Set(free[j], Scale(j) * Eigen::Map<const Eigen::VectorXd>(parameters[1 + j], free[j]->Dimension(vehicle)));
   return effects;
+}
+
+namespace {
+
+// M_c - mean(M_c) at the row samples for the anchored components, from the rotor speeds there.
+Eigen::MatrixXd CentredRotorMoments(const RotorMomentAnchor& anchor, const Eigen::MatrixXd& speed) {
+  Eigen::MatrixXd moments = speed.cwiseAbs2() * anchor.unit.transpose();  // rows x 6
+  moments.rowwise() -= moments.colwise().mean();
+  return moments;
+}
+
+}  // namespace
+
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, double kt, double kd) {
+  RotorMomentAnchor anchor;
+  const int rotors = flight.vehicle.num_rotors();
+  anchor.unit = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, rotors);
+  for (int i = 0; i < rotors; ++i) {
+    const Eigen::VectorXd one = Eigen::VectorXd::Unit(rotors, i);
+    const Eigen::Matrix<double, 6, kNumRotorCoefficients> d = RotorRegressor<double>(one, flight.vehicle);
+    anchor.unit.col(i) = d.col(0) * kt + d.col(1) * kd;
+  }
+  anchor.unit.topRows<3>().setZero();  // the force rows are anchored by the mass
+  const Eigen::MatrixXd moments = CentredRotorMoments(anchor, EffectiveRotorAtRows(flight, Effects{}, {}).speed);
+  for (int c = 3; c < 6; ++c) anchor.power[c] = moments.col(c).squaredNorm();
+  return anchor;
 }
 
 std::shared_ptr<const RotorSignalCache::State> RotorSignalCache::Get(const Effects& effects) const {
@@ -30,6 +57,7 @@ std::shared_ptr<const RotorSignalCache::State> RotorSignalCache::Get(const Effec
     auto state = std::make_shared<State>();
     state->key = key;
     state->rotor = EffectiveRotorAtRows(*flight_, effects, free);
+    if (anchor_) SetGains(state.get());
     state_ = state;
   }
   return state_;
@@ -49,6 +77,27 @@ IdimResidualBlock::IdimResidualBlock(const ProcessedFlight* flight, const RotorS
   set_num_residuals(6 * count);
   mutable_parameter_block_sizes()->push_back(context->num_parameters);
   for (EffectKind kind : blocks->free) mutable_parameter_block_sizes()->push_back(kind->Dimension(flight->vehicle));
+}
+
+// g_c = sqrt(P_c / P_c(no effects)), P_c = sum_s (M_c(s) - mean)^2, and
+// d g_c / d theta = sum_s (M_c(s) - mean) d M_c(s) / d theta / (g_c P_c(no effects)) (the mean's
+// derivative drops out against the centred sum), d M_c / d theta = sum_i u_ci 2 Omega_i d Omega_i.
+void RotorSignalCache::SetGains(State* state) const {
+  const Eigen::MatrixXd& speed = state->rotor.speed;
+  const Eigen::MatrixXd moments = CentredRotorMoments(*anchor_, speed);
+  const size_t coordinates = state->rotor.derivative.size();
+  state->gain_derivative = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(coordinates));
+  for (int c = 0; c < 6; ++c) {
+    if (!(anchor_->power[c] > 0.0)) continue;
+    state->gain[c] = std::sqrt(moments.col(c).squaredNorm() / anchor_->power[c]);
+    if (!(state->gain[c] > 0.0)) continue;
+    for (size_t d = 0; d < coordinates; ++d) {
+      const Eigen::VectorXd moment_derivative =
+          (2.0 * speed.cwiseProduct(state->rotor.derivative[d])) * anchor_->unit.row(c).transpose();
+      state->gain_derivative(c, static_cast<Eigen::Index>(d)) =
+          moments.col(c).dot(moment_derivative) / (state->gain[c] * anchor_->power[c]);
+    }
+  }
 }
 
 // What every pass shares: the criterion's scale, chi and the effect-laden rows.
@@ -73,7 +122,8 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
     const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, first_coordinate);
     for (int c = 0; c < 6; ++c) {
       const int out = 6 * s + c;
-      const double scale = sqrt_weight_[out] / point.d;
+      const double gain = point.rotor->gain[c];
+      const double scale = sqrt_weight_[out] / (point.d * gain);
       T e(0.0);
       for (int k = 0; k < kNumIdimColumns; ++k) e += rows(c, k) * point.flight_chi[k];
       if (first_coordinate == 0) residuals[out] = scale * ScalarPart(e);
@@ -92,8 +142,10 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
           double* j = jacobians[1 + coordinate.effect];
           if (!j) continue;
           const int size = parameter_block_sizes()[1 + coordinate.effect];
-          j[out * size + coordinate.index] =
-              scale * blocks_->Scale(static_cast<size_t>(coordinate.effect)) * e.v[k - first_coordinate];
+          double derivative = scale * e.v[k - first_coordinate];
+          if (coordinate.rotor_derivative >= 0 && point.rotor->gain_derivative.cols() > 0)
+            derivative -= scale * ScalarPart(e) * point.rotor->gain_derivative(c, coordinate.rotor_derivative) / gain;
+          j[out * size + coordinate.index] = blocks_->Scale(static_cast<size_t>(coordinate.effect)) * derivative;
         }
     }
   }

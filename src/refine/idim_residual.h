@@ -5,6 +5,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -28,30 +29,50 @@ struct EffectBlocks {
   Effects At(double const* const* parameters, const Vehicle& vehicle) const;
 };
 
+// The anchor of the anchored criterion (MODEL.md 9) for one flight. Each moment row is divided by
+// the gain g_c of the rotor-signal effects on that row's rotor moment: the RMS about its mean of
+// M_c = sum_i u_ci Omega_i^2 with the effects, over the same without them (u_ci: rotor i's unit
+// moment with the start's kt and kd). An effect that only attenuates the rotor moment by a factor a
+// (a lag where the data have none) lets the inertia shrink by a and the equation error with it,
+// but it shrinks g_c by a too, so the criterion does not move: the measured angular acceleration
+// fixes the scale. A delay keeps g_c at 1. The force rows need no anchor: the known mass fixes it.
+struct RotorMomentAnchor {
+  std::array<double, 6> power{};  // per wrench component: sum (M_c - mean)^2 without effects (0: none)
+  Eigen::Matrix<double, 6, Eigen::Dynamic> unit;  // u_ci
+};
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, double kt, double kd);
+
 // The rotor signal of one flight at its row samples after the rotor-signal effects, with
 // derivatives with respect to the free ones, recomputed (once, under a lock) whenever Ceres
-// evaluates at new rotor-signal values.
+// evaluates at new rotor-signal values; with an anchor, also the gains g_c and their derivatives.
 class RotorSignalCache {
  public:
-  RotorSignalCache(const ProcessedFlight* flight, const EffectBlocks* blocks) : flight_(flight), blocks_(blocks) {}
+  RotorSignalCache(const ProcessedFlight* flight, const EffectBlocks* blocks, const RotorMomentAnchor* anchor = nullptr)
+      : flight_(flight), blocks_(blocks), anchor_(anchor) {}
 
   struct State {
     Eigen::VectorXd key;  // the rotor-signal effects' values, concatenated
     EffectiveRotor rotor;
+    std::array<double, 6> gain{1, 1, 1, 1, 1, 1};
+    // d gain_c / d (free rotor-signal coordinate d), as rotor.derivative[d]: 6 x coordinates.
+    Eigen::Matrix<double, 6, Eigen::Dynamic> gain_derivative;
   };
   std::shared_ptr<const State> Get(const Effects& effects) const;
 
  private:
+  void SetGains(State* state) const;
+
   const ProcessedFlight* flight_;
   const EffectBlocks* blocks_;
+  const RotorMomentAnchor* anchor_;
   mutable std::mutex mutex_;
   mutable std::shared_ptr<const State> state_;
 };
 
 // The criterion's piece that turns the rows of a row sample into whitened residuals and their
-// derivatives: the TLS one, r = sqrt(lambda) (w . chi_t) / d, d^2 = chi_t^T N chi_t / rows, with
-// the TLS weights and metric. Shared by all residual blocks. (Another criterion replaces this
-// class and nothing else.)
+// derivatives: the TLS one, r = sqrt(lambda) (w . chi_t) / (d g_c), d^2 = chi_t^T N chi_t / rows,
+// with the TLS weights and metric and (anchored criterion) the rotor-moment gain g_c of the
+// flight's RotorSignalCache (1 for the TLS criterion). Shared by all residual blocks.
 struct CriterionContext {
   Eigen::MatrixXd metric;  // N over all p + 1 columns
   // The chi block holds chi ./ chi_scale, so that its Jacobian columns are of comparable size (kt is

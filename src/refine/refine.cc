@@ -23,6 +23,7 @@ std::string RefineOptions::Validate() const {
   if (robust_loss != "none" && robust_loss != "huber" && robust_loss != "cauchy")
     return "robust loss must be none, huber or cauchy, got '" + robust_loss + "'";
   if (!(robust_scale > 0.0)) return "robust loss scale must be positive";
+  if (criterion != "anchored" && criterion != "tls") return "criterion must be anchored or tls, got '" + criterion + "'";
   if (!(delay_search_max_s > delay_search_min_s)) return "delay search range is empty";
   if (!(delay_search_step_s > 0.0)) return "delay search step must be positive";
   if (max_iterations < 1) return "max_iterations must be at least 1";
@@ -310,13 +311,17 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   std::vector<std::unique_ptr<RotorSignalCache>> caches;
+  std::vector<internal::RotorMomentAnchor> anchors;
+  anchors.reserve(static_cast<size_t>(system.num_flights()));
   const Eigen::VectorXd sqrt_weight = tls.row_weight.cwiseSqrt();
   std::vector<double*> blocks_of_residual = {scaled_chi.data()};
   for (Eigen::VectorXd& v : effect_values) blocks_of_residual.push_back(v.data());
   int row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
     const ProcessedFlight& flight = linear.flights[f];
-    caches.push_back(std::make_unique<RotorSignalCache>(&flight, &effect_blocks));
+    const bool anchored = options.criterion == "anchored";
+    if (anchored) anchors.push_back(internal::AnchorRotorMoments(flight, tls.chi[0], tls.chi[1]));
+    caches.push_back(std::make_unique<RotorSignalCache>(&flight, &effect_blocks, anchored ? &anchors.back() : nullptr));
     for (int first = 0; first < flight.num_rows_samples(); first += kRowSamplesPerBlock) {
       const int count = std::min(kRowSamplesPerBlock, flight.num_rows_samples() - first);
       ceres::LossFunction* loss = nullptr;

@@ -18,6 +18,7 @@ nlohmann::json RefineOptionsJson(const RefineOptions& options) {
           {"delay_search_s", {options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s}},
           {"robust_loss", options.robust_loss},
           {"robust_scale", options.robust_scale},
+          {"criterion", options.criterion},
           {"max_iterations", options.max_iterations}};
 }
 

@@ -22,8 +22,10 @@ IdentificationResult IdentifySimulated(const std::string& preset, double seconds
 }
 
 // Every Jacobian of the residual block agrees with numeric differentiation at a generic point
-// (effects away from zero, parameters off the optimum), one block per registered effect.
-TEST(IdimResidualBlockTest, PassesGradientChecker) {
+// (effects away from zero, parameters off the optimum), one block per registered effect, for both
+// criteria.
+class IdimResidualBlockTest : public ::testing::TestWithParam<std::string> {};
+TEST_P(IdimResidualBlockTest, PassesGradientChecker) {
   // Motion capture and a low hover, so that the velocity and the heights the rotor-wrench effects
   // need are there and matter.
   const SimulationVehicle preset = PresetVehicle("B");
@@ -40,7 +42,10 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
   ASSERT_TRUE(flight.inputs().velocity && flight.inputs().height && flight.inputs().rotor_radius);
   internal::EffectBlocks blocks;
   blocks.free = AllEffects();
-  internal::RotorSignalCache cache(&flight, &blocks);
+  // The anchored criterion divides the moment rows by the rotor-signal effects' gain on the rotor
+  // moment (not 1 at this point: the lag is 3 % of its range).
+  const internal::RotorMomentAnchor anchor = internal::AnchorRotorMoments(flight, 3.6e-6, 5.1e-8);
+  internal::RotorSignalCache cache(&flight, &blocks, GetParam() == "anchored" ? &anchor : nullptr);
   internal::CriterionContext context;
   context.metric = linear.solution.column_metric;
   context.total_rows = static_cast<double>(linear.system.w.rows());
@@ -51,11 +56,10 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
     if (context.chi_scale[k] == 0.0) context.chi_scale[k] = 1e-4;  // discarded ones: a generic point too
   const int count = 16;
   const Eigen::VectorXd sqrt_weight = linear.solution.row_weight.segment(6 * 40, 6 * count).cwiseSqrt();
-  internal::IdimResidualBlock block(&flight, &cache, &context, &blocks, 0, 40, count, sqrt_weight);
-
   // A generic point: every scaled parameter off the TLS optimum and away from zero.
   Eigen::VectorXd chi = Eigen::VectorXd::LinSpaced(context.num_parameters, 0.9, 1.2);
   chi[0] = 1.0;
+  internal::IdimResidualBlock block(&flight, &cache, &context, &blocks, 0, 40, count, sqrt_weight);
   // Generic values of every registered effect: a few per cent of its range, coordinates differing.
   std::vector<Eigen::VectorXd> values;
   std::vector<double*> parameters = {chi.data()};
@@ -76,11 +80,13 @@ TEST(IdimResidualBlockTest, PassesGradientChecker) {
   EXPECT_TRUE(checker.Probe(parameters.data(), 1e-4, &results)) << results.error_log;
   EXPECT_LT(results.maximum_relative_error, 1e-4);
 }
+INSTANTIATE_TEST_SUITE_P(Criteria, IdimResidualBlockTest, ::testing::Values("anchored", "tls"));
 
-// With every effect off the refinement minimises the TLS criterion itself: it returns the TLS
-// solution.
+// With every effect off the refinement minimises the TLS criterion itself (the anchored one too:
+// without a rotor-signal effect its gains are 1): it returns the TLS solution.
 TEST(RefineTest, AllEffectsOffReturnsTls) {
-  for (TlsMethod method : {TlsMethod::kNoiseAware, TlsMethod::kPaper}) {
+  for (TlsMethod method : {TlsMethod::kNoiseAware, TlsMethod::kPaper})
+    for (const char* criterion : {"tls", "anchored"}) {
     const SimulationVehicle v = PresetVehicle("B");
     SimulationOptions sim;
     sim.duration_s = 30;
@@ -92,12 +98,39 @@ TEST(RefineTest, AllEffectsOffReturnsTls) {
     const IdentificationResult linear = Identify({{flight.vehicle, flight.log, 1.0}}, identify);
     RefineOptions options;
     options.effects = {};
+    options.criterion = criterion;
     const RefineResult refined = Refine(linear, options);
     for (int k = 0; k < linear.system.num_parameters(); ++k) {
       if (!linear.solution.essential[k]) continue;
       EXPECT_NEAR(refined.refined.chi[k], linear.solution.chi[k], 1e-8 * std::abs(linear.solution.chi[k]))
-          << linear.system.parameter_names[k] << " (" << TlsMethodName(method) << ")";
+          << linear.system.parameter_names[k] << " (" << TlsMethodName(method) << ", " << criterion << ")";
     }
+  }
+}
+
+// An attenuation the data do not have: a flight with an IMU lever arm the model lacks (30, -20,
+// 20) mm, refined with delay and motor lag only. The TLS criterion pays the lever arm's moment
+// error with a lead-lag pair 2.3-3.9 std from zero (seeds 1, 3, 4: -12.6 / 12.6 ms, -8.5 / 8.9 ms,
+// -8.3 / 8.2 ms); the anchored one cannot shrink the residual by attenuating: its lag is shorter
+// and within 1.5 std of zero (7.0 +- 5.7, 4.0 +- 7.0, 0.2 +- 12.6 ms).
+TEST(RefineTest, AnchoredCriterionFindsNoLagThatIsNotThere) {
+  for (unsigned seed : {1u, 4u}) {
+    SimulationOptions sim;
+    sim.duration_s = 40;
+    sim.seed = seed;
+    sim.mocap = true;
+    sim.effects.Set("imu_position_m", Eigen::Vector3d(0.03, -0.02, 0.02));
+    const SimulationVehicle preset = PresetVehicle("A");
+    const IdentificationResult linear =
+        testing::IdentifySimulated(Simulate(preset.vehicle, preset.parameters, sim));
+    RefineOptions options;
+    options.effects = {ParseEffectKind("delay"), ParseEffectKind("motor_lag")};
+    const RefineResult tls = Refine(linear, options);
+    options.criterion = "anchored";
+    const RefineResult anchored = Refine(linear, options);
+    EXPECT_GT(tls.effects.Scalar("motor_tau_s"), 2.0 * tls.effects_std.Scalar("motor_tau_s")) << seed;
+    EXPECT_LT(anchored.effects.Scalar("motor_tau_s"), 1.5 * anchored.effects_std.Scalar("motor_tau_s")) << seed;
+    EXPECT_LT(anchored.effects.Scalar("motor_tau_s"), tls.effects.Scalar("motor_tau_s")) << seed;
   }
 }
 
