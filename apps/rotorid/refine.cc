@@ -78,8 +78,8 @@ Command AddRefineCommand(CLI::App& root) {
   command.app->add_option("--robust-loss", options->refine.robust_loss, "none, huber or cauchy")->capture_default_str();
   command.app
       ->add_option("--criterion", options->refine.criterion,
-                   "tls, or anchored: moment rows divided by the rotor-signal effects' gain on the rotor moment, so that a "
-                   "lag cannot win by attenuating it (MODEL.md 9)")
+                   "anchored: moment rows divided by the rotor-signal effects' gain on the rotor moment, so that a lag "
+                   "cannot win by attenuating it (MODEL.md 9); tls: the TLS criterion itself")
       ->check(CLI::IsMember({"anchored", "tls"}))
       ->capture_default_str();
   command.app->add_option("--robust-scale", options->refine.robust_scale, "scale of the robust loss (whitened units)")

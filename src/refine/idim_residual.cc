@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <glog/logging.h>
+
 #include "refine/effect_rows.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/model/rigid_body.h"
@@ -27,18 +29,39 @@ Eigen::MatrixXd CentredRotorMoments(const RotorMomentAnchor& anchor, const Eigen
 
 }  // namespace
 
-RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, double kt, double kd) {
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSystem& system, int index,
+                                     int first_row, const Eigen::VectorXd& chi) {
   RotorMomentAnchor anchor;
   const int rotors = flight.vehicle.num_rotors();
   anchor.unit = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, rotors);
   for (int i = 0; i < rotors; ++i) {
     const Eigen::VectorXd one = Eigen::VectorXd::Unit(rotors, i);
     const Eigen::Matrix<double, 6, kNumRotorCoefficients> d = RotorRegressor<double>(one, flight.vehicle);
-    anchor.unit.col(i) = d.col(0) * kt + d.col(1) * kd;
+    anchor.unit.col(i) = d.col(0) * chi[0] + d.col(1) * chi[1];
   }
   anchor.unit.topRows<3>().setZero();  // the force rows are anchored by the mass
   const Eigen::MatrixXd moments = CentredRotorMoments(anchor, EffectiveRotorAtRows(flight, Effects{}, {}).speed);
-  for (int c = 3; c < 6; ++c) anchor.power[c] = moments.col(c).squaredNorm();
+  const int samples = flight.num_rows_samples();
+  Eigen::VectorXd chi_t(chi.size() + 1);
+  chi_t << chi, 1.0;
+  Eigen::VectorXd rotor_t = Eigen::VectorXd::Zero(chi_t.size());
+  rotor_t.head<kNumRotorCoefficients>() = chi.head<kNumRotorCoefficients>();
+  for (int c = 3; c < 6; ++c) {
+    anchor.power[c] = moments.col(c).squaredNorm();
+    // Per-row variances at the start: the residual, the noise model's share of it, and the rotor
+    // signal's part of that.
+    double residual = 0.0;
+    for (int s = 0; s < samples; ++s) residual += std::pow(system.w.row(first_row + 6 * s + c).dot(chi_t), 2);
+    residual /= std::max(samples, 1);
+    const Eigen::MatrixXd& noise_cov = system.group_noise_cov[static_cast<size_t>(6 * index + c)];
+    const double noise = std::max(chi_t.dot(noise_cov * chi_t), 0.0) / std::max(samples, 1);
+    const double rotor_noise = std::clamp(rotor_t.dot(noise_cov * rotor_t) / std::max(samples, 1), 0.0, noise);
+    const double scaling = std::max(residual - noise, 0.0) + rotor_noise;
+    const double total = std::max(residual, noise);
+    anchor.share[c] = total > 0.0 ? std::clamp(scaling / total, 0.0, 1.0) : 1.0;
+  }
+  LOG(INFO) << "anchored criterion, " << flight.source << ": share of the residual that scales with the rotor moment "
+            << "Mx " << anchor.share[3] << ", My " << anchor.share[4] << ", Mz " << anchor.share[5];
   return anchor;
 }
 
@@ -81,7 +104,8 @@ IdimResidualBlock::IdimResidualBlock(const ProcessedFlight* flight, const RotorS
 
 // g_c = sqrt(P_c / P_c(no effects)), P_c = sum_s (M_c(s) - mean)^2, and
 // d g_c / d theta = sum_s (M_c(s) - mean) d M_c(s) / d theta / (g_c P_c(no effects)) (the mean's
-// derivative drops out against the centred sum), d M_c / d theta = sum_i u_ci 2 Omega_i d Omega_i.
+// derivative drops out against the centred sum), d M_c / d theta = sum_i u_ci 2 Omega_i d Omega_i;
+// h_c = sqrt(1 - s_c + s_c g_c^2), d h_c = s_c g_c d g_c / h_c.
 void RotorSignalCache::SetGains(State* state) const {
   const Eigen::MatrixXd& speed = state->rotor.speed;
   const Eigen::MatrixXd moments = CentredRotorMoments(*anchor_, speed);
@@ -89,13 +113,15 @@ void RotorSignalCache::SetGains(State* state) const {
   state->gain_derivative = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, static_cast<Eigen::Index>(coordinates));
   for (int c = 0; c < 6; ++c) {
     if (!(anchor_->power[c] > 0.0)) continue;
-    state->gain[c] = std::sqrt(moments.col(c).squaredNorm() / anchor_->power[c]);
-    if (!(state->gain[c] > 0.0)) continue;
+    const double g = std::sqrt(moments.col(c).squaredNorm() / anchor_->power[c]);
+    const double share = anchor_->share[c];
+    state->gain[c] = std::sqrt(1.0 - share + share * g * g);
+    if (!(g > 0.0) || !(state->gain[c] > 0.0)) continue;
     for (size_t d = 0; d < coordinates; ++d) {
       const Eigen::VectorXd moment_derivative =
           (2.0 * speed.cwiseProduct(state->rotor.derivative[d])) * anchor_->unit.row(c).transpose();
-      state->gain_derivative(c, static_cast<Eigen::Index>(d)) =
-          moments.col(c).dot(moment_derivative) / (state->gain[c] * anchor_->power[c]);
+      const double dg = moments.col(c).dot(moment_derivative) / (g * anchor_->power[c]);
+      state->gain_derivative(c, static_cast<Eigen::Index>(d)) = share * g * dg / state->gain[c];
     }
   }
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rotorid/ident/observation.h"
+#include "rotorid/ident/tls.h"
 #include "rotorid/refine/effect_model.h"
 
 namespace rotorid::internal {
@@ -30,17 +31,24 @@ struct EffectBlocks {
 };
 
 // The anchor of the anchored criterion (MODEL.md 9) for one flight. Each moment row is divided by
-// the gain g_c of the rotor-signal effects on that row's rotor moment: the RMS about its mean of
-// M_c = sum_i u_ci Omega_i^2 with the effects, over the same without them (u_ci: rotor i's unit
-// moment with the start's kt and kd). An effect that only attenuates the rotor moment by a factor a
-// (a lag where the data have none) lets the inertia shrink by a and the equation error with it,
-// but it shrinks g_c by a too, so the criterion does not move: the measured angular acceleration
-// fixes the scale. A delay keeps g_c at 1. The force rows need no anchor: the known mass fixes it.
+// h_c = sqrt(1 - s_c + s_c g_c^2), with g_c the gain of the rotor-signal effects on that row's
+// rotor moment: the RMS about its mean of M_c = sum_i u_ci Omega_i^2 with the effects, over the
+// same without them (u_ci: rotor i's unit moment with the start's kt and kd). An effect that only
+// attenuates the rotor moment by a factor a (a lag where the data have none) lets the inertia
+// shrink by a and, with it, every part of the equation error that passes through the rotor moment
+// or the inertia: the model error and the rotor signal's noise. s_c is that part's share of the
+// row's residual variance at the start (what the noise model does not explain, plus the rotor
+// noise), so h_c shrinks with it and the criterion does not move; the remaining share (noise of
+// the measured angular acceleration and specific force) does not scale, and h_c does not charge
+// it. A delay keeps g_c at 1. The force rows need no anchor: the known mass fixes their scale.
 struct RotorMomentAnchor {
   std::array<double, 6> power{};  // per wrench component: sum (M_c - mean)^2 without effects (0: none)
+  std::array<double, 6> share{};  // s_c
   Eigen::Matrix<double, 6, Eigen::Dynamic> unit;  // u_ci
 };
-RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, double kt, double kd);
+// `flight` is flight `index` of `system`, its rows from `first_row` of system.w; chi the start.
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSystem& system, int index,
+                                     int first_row, const Eigen::VectorXd& chi);
 
 // The rotor signal of one flight at its row samples after the rotor-signal effects, with
 // derivatives with respect to the free ones, recomputed (once, under a lock) whenever Ceres
@@ -53,8 +61,8 @@ class RotorSignalCache {
   struct State {
     Eigen::VectorXd key;  // the rotor-signal effects' values, concatenated
     EffectiveRotor rotor;
-    std::array<double, 6> gain{1, 1, 1, 1, 1, 1};
-    // d gain_c / d (free rotor-signal coordinate d), as rotor.derivative[d]: 6 x coordinates.
+    std::array<double, 6> gain{1, 1, 1, 1, 1, 1};  // h_c
+    // d h_c / d (free rotor-signal coordinate d), as rotor.derivative[d]: 6 x coordinates.
     Eigen::Matrix<double, 6, Eigen::Dynamic> gain_derivative;
   };
   std::shared_ptr<const State> Get(const Effects& effects) const;

@@ -320,7 +320,7 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   for (int f = 0; f < system.num_flights(); ++f) {
     const ProcessedFlight& flight = linear.flights[f];
     const bool anchored = options.criterion == "anchored";
-    if (anchored) anchors.push_back(internal::AnchorRotorMoments(flight, tls.chi[0], tls.chi[1]));
+    if (anchored) anchors.push_back(internal::AnchorRotorMoments(flight, system, f, row, tls.chi));
     caches.push_back(std::make_unique<RotorSignalCache>(&flight, &effect_blocks, anchored ? &anchors.back() : nullptr));
     for (int first = 0; first < flight.num_rows_samples(); first += kRowSamplesPerBlock) {
       const int count = std::min(kRowSamplesPerBlock, flight.num_rows_samples() - first);

@@ -5,9 +5,10 @@
 //     sum_i lambda_i (w_i(effects) . chi_t)^2 / (chi_t^T N chi_t)  (up to a constant factor),
 // with the row weights lambda and column metric N of the TLS step, so that with every effect off
 // it returns the TLS solution and any difference is caused by the effects alone. The "anchored"
-// variant (MODEL.md 9) also divides each moment row by the rotor-signal effects' gain on its rotor
-// moment (idim_residual.h), so that an effect which only attenuates the rotor moment cannot win by
-// letting the inertia shrink with it; with no rotor-signal effect it is the TLS criterion.
+// variant (MODEL.md 9, the default) also divides each moment row by the rotor-signal effects' gain
+// on the part of its residual that passes through the rotor moment (idim_residual.h), so that an
+// effect which only attenuates the rotor moment cannot win by letting the inertia shrink with it;
+// with no rotor-signal effect it is the TLS criterion.
 
 #include <Eigen/Core>
 #include <optional>
@@ -33,9 +34,8 @@ struct RefineOptions {
   // Robust loss on the whitened residuals: "none", "huber" or "cauchy", with its scale.
   std::string robust_loss = "none";
   double robust_scale = 3.0;
-  // "tls" or "anchored" (see above). Not yet the default: on simulated delay + lag flights it
-  // moves the split between them by about 0.5 ms beyond the TLS's (docs/real_flights.md).
-  std::string criterion = "tls";
+  // "anchored" or "tls" (see above).
+  std::string criterion = "anchored";
   // The other effects are kept in the physical bounds of their descriptors (beyond them the model
   // is not what is wrong); an estimate that ends on a bound is reported as such.
   int max_iterations = 100;
