@@ -137,7 +137,7 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   out.rotor = FilteredRotorSpeed(filter, out.rotor_raw.array().square().matrix());
   out.rotor_acceleration = FourthOrderCentralDifference(out.rotor, dt);
   if (log.rotor_command)
-    out.rotor_command = FiltFiltColumns(filter, InterpolateLinear(log.t_s, *log.rotor_command, out.t_s));
+    out.rotor_command = InterpolateLinear(log.t_s, *log.rotor_command, out.t_s);  // raw, as rotor_raw
   if (log.voltage_v)
     out.voltage_v = FiltFiltColumns(filter, InterpolateLinear(log.t_s, *log.voltage_v, out.t_s)).col(0);
   if (log.mocap) {

@@ -57,6 +57,11 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
       internal::FailAt(source, map, problem);
     vehicle.command_to_speed = command_to_speed;
   }
+  if (const YAML::Node voltage = root["command_to_speed_voltage"]) {
+    vehicle.command_to_speed_voltage_v = internal::ReadYamlNumber(source, voltage, "command_to_speed_voltage");
+    if (!(*vehicle.command_to_speed_voltage_v > 0.0) || *vehicle.command_to_speed_voltage_v > 1000.0)
+      internal::FailAt(source, voltage, "command_to_speed_voltage must be a battery voltage in V, in (0, 1000]");
+  }
   if (const YAML::Node radius = root["rotor_radius"]) {
     vehicle.rotor_radius_m = internal::ReadYamlNumber(source, radius, "rotor_radius");
     if (!(*vehicle.rotor_radius_m > 0.0) || *vehicle.rotor_radius_m > 2.0)
@@ -85,6 +90,8 @@ std::string VehicleToYaml(const Vehicle& vehicle) {
   if (vehicle.command_to_speed) {
     const Eigen::Vector3d& c = vehicle.command_to_speed->coefficients;
     out << "command_to_speed: [" << c[0] << ", " << c[1] << ", " << c[2] << "]  # Omega = c0 + c1 u + c2 u^2 (rad/s)\n";
+  if (vehicle.command_to_speed_voltage_v)
+    out << "command_to_speed_voltage: " << *vehicle.command_to_speed_voltage_v << "  # V, the map's battery voltage\n";
   }
   if (vehicle.rotor_radius_m) out << "rotor_radius: " << *vehicle.rotor_radius_m << "  # m\n";
   return out.str();

@@ -44,7 +44,8 @@ class ImuEffect final : public EffectDescriptor {
 };
 
 //   struct MyRotorModel {
-//     template <typename T> static void Transform(const T* p, double dt, const VectorT& in, VectorT* out);
+//     template <typename T>
+//     static void Transform(const T* p, const RotorSignalInput& input, const VectorT& in, VectorT* out);
 //     static double CommandDelay(const Eigen::VectorXd& v);        // what the simulator delays by
 //     static double MotorTimeConstant(const Eigen::VectorXd& v);   // the lag the simulator adds
 //     static double EquivalentValue(double delay_s);               // about this rotor-signal delay
@@ -53,13 +54,13 @@ template <class Model>
 class RotorSignalEffect final : public EffectDescriptor {
  public:
   explicit RotorSignalEffect(Info info) : EffectDescriptor(std::move(info)) {}
-  void TransformRotorSignal(const double* p, double dt, const Eigen::VectorXd& in,
+  void TransformRotorSignal(const double* p, const RotorSignalInput& input, const Eigen::VectorXd& in,
                             Eigen::VectorXd* out) const override {
-    Model::Transform(p, dt, in, out);
+    Model::Transform(p, input, in, out);
   }
-  void TransformRotorSignal(const RotorJet* p, double dt, const Eigen::Matrix<RotorJet, -1, 1>& in,
+  void TransformRotorSignal(const RotorJet* p, const RotorSignalInput& input, const Eigen::Matrix<RotorJet, -1, 1>& in,
                             Eigen::Matrix<RotorJet, -1, 1>* out) const override {
-    Model::Transform(p, dt, in, out);
+    Model::Transform(p, input, in, out);
   }
   double SimulatedCommandDelay(const Eigen::VectorXd& v) const override { return Model::CommandDelay(v); }
   double SimulatedMotorTimeConstant(const Eigen::VectorXd& v) const override { return Model::MotorTimeConstant(v); }

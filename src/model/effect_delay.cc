@@ -17,9 +17,10 @@ namespace {
 
 struct DelayModel {
   template <typename T>
-  static void Transform(const T* p, double dt, const Eigen::Matrix<T, -1, 1>& x, Eigen::Matrix<T, -1, 1>* out) {
+  static void Transform(const T* p, const RotorSignalInput& input, const Eigen::Matrix<T, -1, 1>& x,
+                        Eigen::Matrix<T, -1, 1>* out) {
     const Eigen::Index n = x.size();
-    const T shift = p[0] / dt;
+    const T shift = p[0] / input.dt;
     const double whole = std::floor(ScalarPart(shift));
     const T frac = shift - T(whole);  // in [0, 1): u[k] = x(k - whole - frac)
     const Eigen::Index offset = static_cast<Eigen::Index>(whole);

@@ -14,8 +14,10 @@ struct MotorLagModel {
   // with the tau -> 0 limit (a = 0, c = tau/dt) taken analytically so that the derivative at
   // tau = 0 is the first-order one instead of vanishing like exp(-dt/tau). Starts in steady state.
   template <typename T>
-  static void Transform(const T* p, double dt, const Eigen::Matrix<T, -1, 1>& u, Eigen::Matrix<T, -1, 1>* out) {
+  static void Transform(const T* p, const RotorSignalInput& input, const Eigen::Matrix<T, -1, 1>& u,
+                        Eigen::Matrix<T, -1, 1>* out) {
     using std::exp;
+    const double dt = input.dt;
     const T& tau = p[0];
     T a, c;
     if (ScalarPart(tau) > 1e-6 * dt) {

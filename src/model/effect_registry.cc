@@ -14,7 +14,8 @@
   X(RotorInertiaEffect)    \
   X(RotorThrustScaleEffect) \
   X(AccDelayEffect)         \
-  X(GroundEffectEffect)
+  X(GroundEffectEffect)    \
+  X(BatteryEffect)
 
 namespace rotorid {
 namespace internal {

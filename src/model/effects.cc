@@ -107,6 +107,8 @@ std::string EffectDescriptor::Format(const Eigen::VectorXd& value, const Eigen::
 
 std::string EffectDescriptor::CheckSimulatable(const Eigen::VectorXd& value) const {
   const SimulatorLimit& limit = info_.simulator_limit;
+  if (limit.low == 0.0 && limit.high == 0.0 && !value.isZero(0.0))
+    return info_.parameter_name + ": rotorid's simulator does not model " + info_.name;
   if (limit.per_coordinate) {
     for (Eigen::Index k = 0; k < value.size(); ++k)
       if (!std::isfinite(value[k]) || value[k] < limit.low || value[k] > limit.high)
@@ -127,10 +129,11 @@ void EffectDescriptor::CorrectImu(const double*, ImuSample<double>*) const { Not
 void EffectDescriptor::CorrectImu(const ImuJet*, ImuSample<ImuJet>*) const { NotOfStage(*this, "IMU model"); }
 void EffectDescriptor::CorrectImu(const WideImuJet*, ImuSample<WideImuJet>*) const { NotOfStage(*this, "IMU model"); }
 void EffectDescriptor::ApplyToSensor(const double*, ImuSample<double>*) const { NotOfStage(*this, "sensor model"); }
-void EffectDescriptor::TransformRotorSignal(const double*, double, const Eigen::VectorXd&, Eigen::VectorXd*) const {
+void EffectDescriptor::TransformRotorSignal(const double*, const RotorSignalInput&, const Eigen::VectorXd&,
+                                            Eigen::VectorXd*) const {
   NotOfStage(*this, "rotor-signal model");
 }
-void EffectDescriptor::TransformRotorSignal(const RotorJet*, double, const Eigen::Matrix<RotorJet, -1, 1>&,
+void EffectDescriptor::TransformRotorSignal(const RotorJet*, const RotorSignalInput&, const Eigen::Matrix<RotorJet, -1, 1>&,
                                             Eigen::Matrix<RotorJet, -1, 1>*) const {
   NotOfStage(*this, "rotor-signal model");
 }

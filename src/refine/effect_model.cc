@@ -19,10 +19,22 @@ Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> TransformRotors(const Processed
   const Eigen::Index n = flight.rotor_raw.rows(), rotors = flight.rotor_raw.cols();
   Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> out(n, rotors);
   Eigen::Matrix<T, Eigen::Dynamic, 1> signal, next;
+  RotorSignalInput input;
+  input.dt = flight.dt_s;
+  Eigen::VectorXd command;
+  if (flight.voltage_v && flight.voltage_v->size() == n) {
+    input.voltage = &*flight.voltage_v;
+    input.reference_voltage = flight.vehicle.command_to_speed_voltage_v.value_or(flight.voltage_v->mean());
+  }
+  if (flight.vehicle.command_to_speed) input.map = &*flight.vehicle.command_to_speed;
   for (Eigen::Index r = 0; r < rotors; ++r) {
     signal = flight.rotor_raw.col(r).cast<T>();
+    if (flight.rotor_command && flight.rotor_command->rows() == n) {
+      command = flight.rotor_command->col(r);
+      input.command = &command;
+    }
     for (size_t j = 0; j < chain.size(); ++j) {
-      chain[j]->TransformRotorSignal(parameters[j], flight.dt_s, signal, &next);
+      chain[j]->TransformRotorSignal(parameters[j], input, signal, &next);
       signal.swap(next);
     }
     out.col(r) = signal;

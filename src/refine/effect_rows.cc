@@ -43,12 +43,18 @@ EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, co
       out->free_index.push_back(it == free.end() ? -1 : static_cast<int>(it - free.begin()));
     }
   }
-  int rotor_derivative = 0;
-  for (size_t b = 0; b < free.size(); ++b) {
-    const bool on_rotor = free[b]->stage() == EffectStage::kRotorSignal;
+  // EffectiveRotorAtRows lists the rotor-signal derivatives in chain order (the battery, first in
+  // the chain, is last in the registry): each free rotor-signal effect's first one.
+  std::vector<int> rotor_offset(free.size(), -1);
+  int rotor_derivatives = 0;
+  for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal))
+    if (const auto it = std::find(free.begin(), free.end(), kind); it != free.end()) {
+      rotor_offset[static_cast<size_t>(it - free.begin())] = rotor_derivatives;
+      rotor_derivatives += kind->Dimension(flight->vehicle);
+    }
+  for (size_t b = 0; b < free.size(); ++b)
     for (int a = 0; a < free[b]->Dimension(flight->vehicle); ++a)
-      coordinates_.push_back({static_cast<int>(b), a, on_rotor ? rotor_derivative++ : -1});
-  }
+      coordinates_.push_back({static_cast<int>(b), a, rotor_offset[b] < 0 ? -1 : rotor_offset[b] + a});
 }
 
 template <typename T>

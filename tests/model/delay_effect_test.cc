@@ -29,7 +29,7 @@ std::pair<double, double> DelayedAt(double delay_s, Eigen::Index k) {
   const Eigen::Matrix<RotorJet, -1, 1> in = x.cast<RotorJet>();
   Eigen::Matrix<RotorJet, -1, 1> out;
   RotorJet p(delay_s, 0);
-  ParseEffectKind("delay")->TransformRotorSignal(&p, kDt, in, &out);
+  ParseEffectKind("delay")->TransformRotorSignal(&p, RotorSignalInput{kDt}, in, &out);
   return {out[k].a, out[k].v[0]};
 }
 
@@ -38,7 +38,7 @@ TEST(DelayEffectTest, WholeSamplesShiftTheLogExactly) {
   for (int samples : {0, 1, 5}) {
     Eigen::VectorXd out;
     const double delay = samples * kDt;
-    ParseEffectKind("delay")->TransformRotorSignal(&delay, kDt, x, &out);
+    ParseEffectKind("delay")->TransformRotorSignal(&delay, RotorSignalInput{kDt}, x, &out);
     for (Eigen::Index k = 10; k < 390; ++k) ASSERT_NEAR(out[k], x[k - samples], 1e-9) << samples << " samples";
   }
 }

@@ -10,6 +10,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/core/vehicle.h"
 #include "rotorid/io/flight_csv.h"
+#include "rotorid/io/flight_source.h"
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/effects.h"
 #include "rotorid/refine/refine.h"
@@ -109,6 +110,34 @@ TEST(RealVehicleEffectsTest, AccDelayCorrectionShiftsTheAccelerometerBack) {
 }
 
 // A per-rotor value with the wrong count is refused by name, not read past its end.
+// battery: the speed a command gives is map(u (V / V_ref)^beta), written out here; it needs a
+// command log with a voltage, and rotorid's simulator refuses it by name.
+TEST(RealVehicleEffectsTest, BatteryScalesTheCommandBeforeTheMap) {
+  CommandToSpeed map;
+  map.coefficients = Eigen::Vector3d(150.0, 3700.0, -600.0);
+  const Eigen::Vector3d u(0.4, 0.5, 0.6), v(3.9, 3.7, 3.4);
+  const Eigen::VectorXd command = u, voltage = v;
+  RotorSignalInput input;
+  input.dt = 0.002;
+  input.command = &command;
+  input.voltage = &voltage;
+  input.map = &map;
+  input.reference_voltage = 3.7;
+  Eigen::VectorXd logged(3), out;
+  for (int k = 0; k < 3; ++k) logged[k] = map(u[k]);
+  for (const double beta : {0.0, 0.5, 1.0, 2.0}) {
+    Kind("battery")->TransformRotorSignal(&beta, input, logged, &out);
+    ASSERT_EQ(out.size(), 3);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(out[k], map(u[k] * std::pow(v[k] / 3.7, beta)), 1e-9) << beta << " " << k;
+  }
+  FlightInputs command_only;
+  command_only.rotor_command = true;
+  EXPECT_NE(Kind("battery")->Unavailable(command_only).find("voltage"), std::string::npos);
+  EXPECT_NE(Kind("battery_exponent")->CheckSimulatable(Eigen::VectorXd::Ones(1)).find("does not model battery"),
+            std::string::npos);
+  EXPECT_EQ(Kind("battery")->CheckSimulatable(Eigen::VectorXd::Zero(1)), "");
+}
+
 TEST(RealVehicleEffectsTest, PerRotorValueOfTheWrongSizeIsRefused) {
   Effects effects;
   effects.Set(Kind("rotor_thrust_scale"), Eigen::Vector2d(0.01, -0.01));
@@ -244,6 +273,25 @@ TEST(IndependentSimThrustScaleTest, ScalesOfOppositeRotorsAreToldApart) {
   EXPECT_NEAR(s[0] - s[1], truth[0] - truth[1], 0.01);
   EXPECT_NEAR(s[2] - s[3], truth[2] - truth[3], 0.01);
   EXPECT_NEAR(s.sum(), 0.0, 1e-5);
+}
+
+// The independent simulator's Crazyflie command log with a voltage column (battery_exponent 1,
+// motor_tau_s 50 ms, map and its voltage in the vehicle file): both read as it defines them.
+TEST(IndependentSimBatteryTest, ExponentAndLagOfACommandLog) {
+  const auto dir = testing::SharedDataPath("independent-sim");
+  if (!dir) GTEST_SKIP() << "../shared/data/independent-sim is absent";
+  const std::string base = *dir + "/CF_battery_motor_lag";
+  const Vehicle vehicle = ReadVehicleYaml(base + ".yaml");
+  ASSERT_TRUE(vehicle.command_to_speed_voltage_v.has_value());
+  EXPECT_DOUBLE_EQ(*vehicle.command_to_speed_voltage_v, 3.7);
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  const IdentificationResult linear = Identify({{vehicle, LoadFlightLog(base + ".csv", vehicle), 1.0}}, identify);
+  ASSERT_TRUE(linear.flights[0].inputs().voltage && linear.flights[0].inputs().rotor_command);
+  const SimulationTruth truth = ReadTruthJson(base + "_truth.json");
+  const RefineResult refined = RefineWith(linear, {"battery", "motor_lag"});
+  EXPECT_NEAR(refined.effects.Scalar("battery_exponent"), truth.effects.Scalar("battery_exponent"), 0.1);
+  EXPECT_NEAR(refined.effects.Scalar("motor_tau_s"), truth.effects.Scalar("motor_tau_s"), 0.005);
 }
 
 }  // namespace

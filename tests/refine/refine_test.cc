@@ -38,8 +38,15 @@ TEST_P(IdimResidualBlockTest, PassesGradientChecker) {
   sim_options.effects.Set("motor_tau_s", 0.03);
   const IdentificationResult linear =
       testing::IdentifySimulated(Simulate(preset.vehicle, preset.parameters, sim_options));
-  const ProcessedFlight& flight = linear.flights[0];
+  ProcessedFlight flight = linear.flights[0];
   ASSERT_TRUE(flight.inputs().velocity && flight.inputs().height && flight.inputs().rotor_radius);
+  // A command log with a sagging voltage, so that the battery effect acts: Omega = 1500 u + 300 u^2.
+  CommandToSpeed map;
+  map.coefficients = Eigen::Vector3d(0.0, 1500.0, 300.0);
+  flight.vehicle.command_to_speed = map;
+  flight.rotor_command = flight.rotor_raw.unaryExpr([](double omega) { return (std::sqrt(2250000.0 + 1200.0 * omega) - 1500.0) / 600.0; });
+  flight.voltage_v = Eigen::VectorXd::LinSpaced(flight.rotor_raw.rows(), 4.1, 3.6);
+  ASSERT_TRUE(flight.inputs().voltage && flight.inputs().rotor_command);
   internal::EffectBlocks blocks;
   blocks.free = AllEffects();
   // The anchored criterion divides the moment rows by the rotor-signal effects' gain on the rotor

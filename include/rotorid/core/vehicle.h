@@ -35,6 +35,8 @@ struct Vehicle {
   std::optional<CommandToSpeed> command_to_speed;
   // Propeller radius (m), for the ground effect.
   std::optional<double> rotor_radius_m = std::nullopt;
+  // The battery voltage command_to_speed was measured at (V), for the battery effect.
+  std::optional<double> command_to_speed_voltage_v = std::nullopt;
   // The file it was read from (empty when built in code), for messages. Last, so that aggregate
   // initialisations {name, mass, rotors, map} stay valid.
   std::string source = "";

@@ -26,6 +26,18 @@ struct Jet;
 namespace rotorid {
 
 struct Vehicle;
+struct CommandToSpeed;
+
+// What a rotor-signal effect sees of one rotor's log besides the signal it transforms: the base time
+// step and, for a command log mapped to speed, the raw command, the battery voltage and the map
+// (null where the log has none).
+struct RotorSignalInput {
+  double dt = 0.0;
+  const Eigen::VectorXd* command = nullptr;  // u of this rotor (the map's input), unfiltered
+  const Eigen::VectorXd* voltage = nullptr;  // V
+  const CommandToSpeed* map = nullptr;
+  double reference_voltage = 0.0;  // the map's voltage (vehicle file), else the flight's mean
+};
 
 // Where in the chain from the true physics to the logged signals an effect acts.
 enum class EffectStage {
@@ -198,12 +210,13 @@ class EffectDescriptor {
   virtual void AddRotorWrench(const WideImuJet* p, const RotorSample<WideImuJet>& sample,
                               RotorWrenchTerms<WideImuJet>* terms) const;
 
-  // kRotorSignal: one rotor's signal at the base rate (time step dt) -> what acts after this
-  // effect, for the model; and the simulator's view of it: the delay it adds to the command and
-  // the time constant of the first-order lag it adds between command and rotor.
-  virtual void TransformRotorSignal(const double* p, double dt, const Eigen::VectorXd& in, Eigen::VectorXd* out) const;
-  virtual void TransformRotorSignal(const RotorJet* p, double dt, const Eigen::Matrix<RotorJet, -1, 1>& in,
-                                    Eigen::Matrix<RotorJet, -1, 1>* out) const;
+  // kRotorSignal: one rotor's signal at the base rate -> what acts after this effect, for the
+  // model; and the simulator's view of it: the delay it adds to the command and the time constant
+  // of the first-order lag it adds between command and rotor.
+  virtual void TransformRotorSignal(const double* p, const RotorSignalInput& input, const Eigen::VectorXd& in,
+                                    Eigen::VectorXd* out) const;
+  virtual void TransformRotorSignal(const RotorJet* p, const RotorSignalInput& input,
+                                    const Eigen::Matrix<RotorJet, -1, 1>& in, Eigen::Matrix<RotorJet, -1, 1>* out) const;
   virtual double SimulatedCommandDelay(const Eigen::VectorXd& /*value*/) const { return 0.0; }
   // kImuSensor: the delay of the accelerometer stream behind the gyro's that the simulator applies
   // to the whole series (its per-sample ApplyToSensor leaves the sample alone).
