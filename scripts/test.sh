@@ -14,14 +14,21 @@ ctest --test-dir build/release --no-tests=error --output-on-failure -j"$JOBS" --
 # Debug (assertions on, no NDEBUG) at -O1: the sanitizers' recommended level. At -O0 the
 # Eigen- and Ceres-heavy tests run about 100x slower than Release and the suite takes an hour.
 # -g1 (line tables) is all the sanitizers' stack traces need, and compiles faster than -g.
+# A unity build (16 sources per translation unit): the library's and the CLI's sources share their
+# Eigen, Ceres and CLI11 instantiations instead of compiling them once per file (Release build of
+# the library and CLI about 2.5x faster; 3m15 against 4m30 for everything). The Release build above
+# stays one file per unit, so a source that compiles only thanks to its neighbours' includes fails
+# there.
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DROTORID_SANITIZE=ON -DROTORID_BUILD_TESTS=ON -DROTORID_BUILD_BENCHMARKS=OFF \
-  "-DCMAKE_CXX_FLAGS_DEBUG=-g1 -O1"
+  "-DCMAKE_CXX_FLAGS_DEBUG=-g1 -O1" -DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16
 cmake --build build/asan -j"$JOBS"
 # The ablation study (every subset of three effects refined, 380 s under the sanitizers) runs the
 # refinement paths RefineTest and EffectRecoveryTest already run here, and the independent
 # simulator's flights (60 s under the sanitizers) the paths SimulatedRecoveryTest runs here: both
-# run in Release above.
+# run in Release above. The anchored criterion's study of a withheld lever arm (four refinements,
+# 55 s under the sanitizers) runs the paths that RefineTest.AllEffectsOffReturnsTls (anchored) and
+# the gradient checker run here.
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --no-tests=error --output-on-failure -j"$JOBS" --timeout 1800 \
-  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*)$'
+  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere)$'
 

@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/model/parameters.h"
 
@@ -40,12 +41,6 @@ namespace {
 constexpr double kAirDensityKgpm3 = 1.225;
 constexpr double kRpmPerRadps = 60.0 / (2.0 * M_PI);
 constexpr double kDegPerRad = 180.0 / M_PI;
-
-std::string Number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.3g", value);
-  return buffer;
-}
 
 double Median(std::vector<double> values) {
   if (values.empty()) return 0.0;
@@ -137,8 +132,8 @@ Eigen::Vector3d PatternCorrelation(const Eigen::MatrixXd& measured, const Eigen:
 
 Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
   const double ratio = m.acc_median / m.gravity;
-  const std::string measured = "median |acc| " + Number(m.acc_median) + " m/s^2, median |gyro| " +
-                               Number(m.gyro_median) + " rad/s, g = " + Number(m.gravity) + " m/s^2";
+  const std::string measured = "median |acc| " + ShortNumber(m.acc_median) + " m/s^2, median |gyro| " +
+                               ShortNumber(m.gyro_median) + " rad/s, g = " + ShortNumber(m.gravity) + " m/s^2";
   if (ratio >= t.gravity_ratio_low && ratio <= t.gravity_ratio_high)
     return {"accelerometer_units", CheckStatus::kOk, source + ": " + measured};
   std::string cause;
@@ -147,17 +142,17 @@ Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, cons
     cause = "the gyro and accelerometer columns appear swapped: exchange gyro_x..z and acc_x..z";
   else if (std::abs(m.acc_median - 1.0) < 0.3)
     cause =
-        "the accelerometer appears to be in g: multiply acc_x..z by " + Number(m.gravity) + " (a column map: unit g)";
+        "the accelerometer appears to be in g: multiply acc_x..z by " + ShortNumber(m.gravity) + " (a column map: unit g)";
   else if (std::abs(m.acc_median / 1000.0 - 1.0) < 0.3)
-    cause = "the accelerometer appears to be in mg: multiply acc_x..z by " + Number(m.gravity / 1000.0);
+    cause = "the accelerometer appears to be in mg: multiply acc_x..z by " + ShortNumber(m.gravity / 1000.0);
   else
     cause = "the accelerometer columns are not the specific force in m/s^2 (about g in hover)";
   return {"accelerometer_units", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
 }
 
 Check MotionCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
-  const std::string measured = "RMS angular velocity " + Number(m.angular_velocity_rms) + " rad/s, thrust variation " +
-                               Number(m.thrust_variation_pct) + " %";
+  const std::string measured = "RMS angular velocity " + ShortNumber(m.angular_velocity_rms) + " rad/s, thrust variation " +
+                               ShortNumber(m.thrust_variation_pct) + " %";
   if (m.thrust_mean <= 0.0)
     return {"motion", CheckStatus::kError, source + ": the rotors never turn (all rotor columns 0): " + measured};
   if (m.angular_velocity_rms < t.motionless_angular_velocity_radps &&
@@ -171,8 +166,8 @@ Check MotionCheck(const FlightMetrics& m, const std::string& source, const Input
 
 // Airborne, the vertical specific force follows the thrust; on the ground it stays at g.
 Check AirborneCheck(const FlightMetrics& m, const std::string& source) {
-  const std::string measured = "correlation of sum Omega^2 with acc_z " + Number(m.thrust_force_correlation) +
-                               ", thrust variation " + Number(m.thrust_variation_pct) + " %";
+  const std::string measured = "correlation of sum Omega^2 with acc_z " + ShortNumber(m.thrust_force_correlation) +
+                               ", thrust variation " + ShortNumber(m.thrust_variation_pct) + " %";
   if (m.thrust_variation_pct > 3.0 && m.thrust_force_correlation < 0.2)
     return {"airborne", CheckStatus::kError,
             source + ": the vertical acceleration does not follow the thrust (" + measured +
@@ -200,9 +195,9 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   };
   const double mass = v.mass_kg, thrust = m.thrust_mean;
   const std::string measured =
-      "mass " + Number(mass) + " kg, arm " + Number(r) + " m: m/r^3 " + Number(density(mass, r)) + " kg/m^3" +
-      (m.rotor_is_speed ? ", kt from hover " + Number(mass * m.gravity / thrust) +
-                              " N s^2 = " + Number(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)"
+      "mass " + ShortNumber(mass) + " kg, arm " + ShortNumber(r) + " m: m/r^3 " + ShortNumber(density(mass, r)) + " kg/m^3" +
+      (m.rotor_is_speed ? ", kt from hover " + ShortNumber(mass * m.gravity / thrust) +
+                              " N s^2 = " + ShortNumber(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)"
                         : "");
   if (fits(mass, r, thrust)) {
     *plausible_kt = m.rotor_is_speed;
@@ -216,7 +211,7 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
     cause = "the rotor positions in " + VehicleFile(v) + " appear to be in mm: give them in m";
   else if (m.rotor_is_speed && fits(mass, r, rpm_thrust))
     cause = "the rotor speeds of " + source + " appear to be in rpm: give |Omega| in rad/s (multiply by " +
-            Number(1.0 / kRpmPerRadps) + ")";
+            ShortNumber(1.0 / kRpmPerRadps) + ")";
   else
     cause = "mass, rotor positions and rotor speeds do not fit a multirotor: check their units (kg, m, rad/s) in " +
             VehicleFile(v) + " and " + source;
@@ -235,8 +230,8 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
   std::iota(order.begin(), order.end(), 0);
   const Eigen::MatrixXd predicted = PredictedPattern(v, order);
   const Eigen::Vector3d c = PatternCorrelation(m.moment_pattern, predicted);
-  const std::string measured = "correlation of the rotor moments with " + VehicleFile(v) + ": roll " + Number(c[0]) +
-                               ", pitch " + Number(c[1]) + ", yaw " + Number(c[2]);
+  const std::string measured = "correlation of the rotor moments with " + VehicleFile(v) + ": roll " + ShortNumber(c[0]) +
+                               ", pitch " + ShortNumber(c[1]) + ", yaw " + ShortNumber(c[2]);
   std::vector<Check> checks;
   const double ok = t.pattern_correlation_ok;
   if (std::min(c[0], c[1]) >= ok) {
@@ -265,7 +260,7 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
       checks.push_back({"rotor_order", m.rotor_is_measured_speed ? CheckStatus::kError : CheckStatus::kWarning,
                         "rotors " + std::to_string(best_i + 1) + " and " + std::to_string(best_j + 1) +
                             " appear swapped in " + VehicleFile(v) + " (the data of " + source +
-                            " fit the swapped order with correlation " + Number(best) + "; " + measured + ")"});
+                            " fit the swapped order with correlation " + ShortNumber(best) + "; " + measured + ")"});
     else
       checks.push_back({"rotor_order", CheckStatus::kWarning,
                         source + ": the rotor moments do not match the rotor positions of " + VehicleFile(v) +
@@ -282,7 +277,7 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
     log_ratio += 0.5 * std::log(kt * p.squaredNorm() / b.dot(p) / reference);
   }
   const double ratio = std::exp(log_ratio);
-  const std::string inertia = "apparent roll/pitch inertia from the rotor moments " + Number(ratio) + " m r^2";
+  const std::string inertia = "apparent roll/pitch inertia from the rotor moments " + ShortNumber(ratio) + " m r^2";
   if (ratio >= t.inertia_ratio_low && ratio <= t.inertia_ratio_high) {
     checks.push_back({"gyro_units", CheckStatus::kOk, source + ": " + inertia});
   } else {
@@ -290,7 +285,7 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
     checks.push_back({"gyro_units", CheckStatus::kError,
                       source + ": " +
                           (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
-                                         Number(1.0 / kDegPerRad) + ")"
+                                         ShortNumber(1.0 / kDegPerRad) + ")"
                                    : "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)") +
                           " (" + inertia + ")"});
   }
@@ -364,7 +359,7 @@ Check InertiaCheck(const CheckedParameters& p, const std::string& config, const 
   for (int a = 0; a < 3; ++a) {
     const Estimate& e = *diagonal[a];
     if (e.estimated && e.value < -3.0 * e.std)
-      problems += std::string(problems.empty() ? "" : "; ") + axis[a] + " = " + Number(e.value) + " < 0";
+      problems += std::string(problems.empty() ? "" : "; ") + axis[a] + " = " + ShortNumber(e.value) + " < 0";
   }
   // Triangle inequalities I_a + I_b >= I_c between the estimated diagonal entries, beyond 3 std.
   for (int c = 0; c < 3; ++c) {
@@ -374,14 +369,14 @@ Check InertiaCheck(const CheckedParameters& p, const std::string& config, const 
     const double std = std::sqrt(a.std * a.std + b.std * b.std + z.std * z.std);
     if (margin < -3.0 * std)
       problems += std::string(problems.empty() ? "" : "; ") + axis[(c + 1) % 3] + " + " + axis[(c + 2) % 3] + " < " +
-                  axis[c] + " by " + Number(-margin);
+                  axis[c] + " by " + ShortNumber(-margin);
   }
   if (problems.empty() && xx.estimated && yy.estimated && zz.estimated) {
     Eigen::Matrix3d inertia;
     inertia << xx.value, get("I_xy").value, get("I_xz").value, get("I_xy").value, yy.value, get("I_yz").value,
         get("I_xz").value, get("I_yz").value, zz.value;
     const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia).eigenvalues()[0];
-    if (!(smallest > 0.0)) problems = "smallest eigenvalue " + Number(smallest) + " <= 0";
+    if (!(smallest > 0.0)) problems = "smallest eigenvalue " + ShortNumber(smallest) + " <= 0";
   }
   if (problems.empty())
     return {"inertia", CheckStatus::kOk,
@@ -418,19 +413,19 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
   const Estimate kt = Find(p, "kt"), kd = Find(p, "kd");
   if (kt.estimated && !(kt.value > 0.0))
     checks.push_back({"kt_positive", CheckStatus::kError,
-                      label + ": kt = " + Number(kt.value) +
+                      label + ": kt = " + ShortNumber(kt.value) +
                           " <= 0: the rotor signal does not push the vehicle up; check the rotor columns and the "
                           "accelerometer's sign (z up, about +g in hover)"});
   else
-    checks.push_back({"kt_positive", CheckStatus::kOk, label + ": kt = " + Number(kt.value)});
+    checks.push_back({"kt_positive", CheckStatus::kOk, label + ": kt = " + ShortNumber(kt.value)});
   if (kd.estimated && kd.value < -3.0 * kd.std)
     checks.push_back({"kd_positive", CheckStatus::kError,
-                      label + ": kd = " + Number(kd.value) + " < 0 (std " + Number(kd.std) +
+                      label + ": kd = " + ShortNumber(kd.value) + " < 0 (std " + ShortNumber(kd.std) +
                           "): the spin directions in the vehicle file appear reversed (+1 = counter-clockwise seen "
                           "from above)"});
   else
     checks.push_back({"kd_positive", CheckStatus::kOk,
-                      label + ": kd = " + Number(kd.value) + (kd.estimated ? "" : " (not estimated)")});
+                      label + ": kd = " + ShortNumber(kd.value) + (kd.estimated ? "" : " (not estimated)")});
   for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd.estimated));
   return checks;
 }
@@ -444,7 +439,7 @@ std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& 
     if (!std::isfinite(e))
       not_finite += std::string(not_finite.empty() ? "" : ", ") + kWrenchComponentNames[j];
     else if (e > 100.0)
-      above += std::string(above.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " + Number(e) + " %";
+      above += std::string(above.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " + ShortNumber(e) + " %";
   }
   if (!not_finite.empty())
     return {{"relative_error", CheckStatus::kError, label + ": relative error not finite in " + not_finite}};

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/model/rigid_body.h"
 
@@ -111,12 +112,6 @@ std::map<std::string, double> NamedValues(const IdimSystem& system, const Eigen:
   return values;
 }
 
-std::string Number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.3g", value);
-  return buffer;
-}
-
 }  // namespace
 
 IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options) {
@@ -146,7 +141,7 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
       const double mean = fit.mean_force_residual_n[a];
       if (std::abs(mean) > 0.01 * mass * g) {
         result.warnings.push_back(fit.source + ": systematic force error in " + kWrenchComponentNames[a] +
-                                  ": mean residual " + Number(mean) + " N (" + Number(mean / mass) +
+                                  ": mean residual " + ShortNumber(mean) + " N (" + ShortNumber(mean / mass) +
                                   " m/s^2 times the mass). The model has no rotor force along this axis, so this "
                                   "points to an accelerometer bias or an IMU misalignment; kt is biased by about "
                                   "the same fraction of g. Try `rotorid refine --effects acc_bias,misalignment`.");
@@ -164,7 +159,7 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
       for (const FlightFit& fit : result.per_flight)
         if (fit.config == config) rms = std::max(rms, fit.excitation.angular_acceleration_rms[axis]);
       missing += (missing.empty() ? "" : "; ") + result.system.parameter_names[k] +
-                 " (RMS angular acceleration about " + (axis == 0 ? "x" : "y") + " " + Number(rms) + " rad/s^2)";
+                 " (RMS angular acceleration about " + (axis == 0 ? "x" : "y") + " " + ShortNumber(rms) + " rad/s^2)";
     }
   }
   if (!missing.empty()) {

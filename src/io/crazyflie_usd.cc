@@ -13,7 +13,7 @@
 namespace rotorid {
 namespace {
 
-constexpr uint8_t kMagic = 0xBC;
+constexpr uint8_t kUsdMagic = 0xBC;
 constexpr size_t kCrcBytes = 4;
 
 [[noreturn]] void Fail(const std::string& source, size_t offset, const std::string& what) {
@@ -215,7 +215,7 @@ CrazyflieUsdLog ParseCrazyflieUsd(std::string_view bytes, const std::string& sou
          "file too short (" + std::to_string(size) + " bytes) for a Crazyflie uSD log: the header and CRC alone take " +
              std::to_string(kMinBytes));
   }
-  if (data[0] != kMagic) {
+  if (data[0] != kUsdMagic) {
     Fail(source, 0, "not a Crazyflie uSD log: first byte is " + Hex(data[0], 2) + ", expected 0xBC");
   }
   log.version = LoadU16(data + 1);

@@ -6,16 +6,11 @@
 #include <sstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 
 namespace rotorid {
 
 namespace {
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 std::string Meta(const FlightLog& log, const std::string& key) {
   const auto it = log.metadata.find(key);
@@ -104,14 +99,14 @@ SegmentMode ParseSegmentMode(const std::string& text) {
 }
 
 std::string FlightInputSummary::ConsoleLine() const {
-  std::string line = "read: " + file + " (" + format + ", " + Format("%.0f Hz", imu_rate_hz) + ", " + rotor_signal +
+  std::string line = "read: " + file + " (" + format + ", " + FormatValue("%.0f Hz", imu_rate_hz) + ", " + rotor_signal +
                      " from " + rotor_signal_source + "), ";
   const double start = window ? std::max(window->start_s, log_start_s) : log_start_s;
   const double end = window ? std::min(window->end_s, log_end_s) : log_end_s;
-  line += Format("%.2f", start) + "-" + Format("%.2f s", end) + ", " + Format("%.2f s used", used_s) + " in " +
+  line += FormatValue("%.2f", start) + "-" + FormatValue("%.2f s", end) + ", " + FormatValue("%.2f s used", used_s) + " in " +
           std::to_string(kept.size()) + " stretch" + (kept.size() == 1 ? "" : "es");
   for (const LeftOutStretch& l : left_out) {
-    line += "\n  left out " + Format("%9.3f", l.start_s) + " - " + Format("%9.3f s", l.end_s) + "  " + l.reason +
+    line += "\n  left out " + FormatValue("%9.3f", l.start_s) + " - " + FormatValue("%9.3f s", l.end_s) + "  " + l.reason +
             (l.detail.empty() ? "" : ": " + l.detail);
   }
   for (const std::string& note : notes) line += "\n  note: " + note;
@@ -152,9 +147,9 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
     const int begin = static_cast<int>(std::lower_bound(t.data(), t.data() + t.size(), window->start_s) - t.data());
     const int end = static_cast<int>(std::upper_bound(t.data(), t.data() + t.size(), window->end_s) - t.data());
     if (end - begin < 2) {
-      throw Error(path + ": --window " + Format("%g", window->start_s) + "," + Format("%g", window->end_s) +
-                  " holds no samples; the log spans " + Format("%.3f", s.log_start_s) + " - " +
-                  Format("%.3f s", s.log_end_s) + " (its own time base)");
+      throw Error(path + ": --window " + FormatValue("%g", window->start_s) + "," + FormatValue("%g", window->end_s) +
+                  " holds no samples; the log spans " + FormatValue("%.3f", s.log_start_s) + " - " +
+                  FormatValue("%.3f s", s.log_end_s) + " (its own time base)");
     }
     if (begin > 0) s.left_out.push_back({t[0], t[begin - 1], "outside --window", ""});
     if (end < t.size()) s.left_out.push_back({t[end], t[t.size() - 1], "outside --window", ""});
@@ -175,8 +170,8 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
             [](const LeftOutStretch& a, const LeftOutStretch& b) { return a.start_s < b.start_s; });
   if (segments.kept.empty()) {
     throw Error(path + ": --segment auto found no airborne, unsaturated stretch of at least " +
-                Format("%g s", segmentation.min_segment_s) + " in " + Format("%.3f", cut.t_s[0]) + " - " +
-                Format("%.3f s", cut.t_s[cut.num_samples() - 1]) +
+                FormatValue("%g s", segmentation.min_segment_s) + " in " + FormatValue("%.3f", cut.t_s[0]) + " - " +
+                FormatValue("%.3f s", cut.t_s[cut.num_samples() - 1]) +
                 "; choose the flight with --window START,END or use --segment none");
   }
   selected.segments = KeptSegments(cut, segments);
@@ -187,7 +182,7 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
     // Messages about a segment name its stretch of the file.
     if (selected.segments.size() > 1 || !segments.excluded.empty() || window)
       segment.source =
-          path + " [" + Format("%.2f", s.kept.back().start_s) + "-" + Format("%.2f s", s.kept.back().end_s) + "]";
+          path + " [" + FormatValue("%.2f", s.kept.back().start_s) + "-" + FormatValue("%.2f s", s.kept.back().end_s) + "]";
   }
   return selected;
 }

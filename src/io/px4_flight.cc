@@ -1,3 +1,4 @@
+#include "rotorid/core/units.h"
 #include "rotorid/io/px4_flight.h"
 
 #include <algorithm>
@@ -18,8 +19,6 @@
 namespace rotorid {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kRpmToRadps = 2.0 * kPi / 60.0;
 // sensor_combined marks an accelerometer sample that is not valid with this relative timestamp.
 constexpr double kRelativeTimestampInvalid = 2147483647.0;
 // PX4 actuator functions: Motor1 = 101 .. Motor12 = 112.

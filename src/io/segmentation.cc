@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
 
 namespace rotorid {
@@ -34,12 +35,6 @@ int Priority(ExclusionReason reason) {
       return 0;
   }
   return 0;
-}
-
-std::string Format(const char* format, double a) {
-  char buffer[128];
-  std::snprintf(buffer, sizeof(buffer), format, a);
-  return buffer;
 }
 
 double Median(std::vector<double> values) {
@@ -148,13 +143,13 @@ std::string Segmentation::Report(const FlightLog& log) const {
   std::string out;
   const double duration = log.duration_s();
   out += "kept " + std::to_string(kept.size()) + " segment" + (kept.size() == 1 ? "" : "s") + ", " +
-         Format("%.2f s", kept_duration_s(log)) + " of " + Format("%.2f s", duration) + " (" +
+         FormatValue("%.2f s", kept_duration_s(log)) + " of " + FormatValue("%.2f s", duration) + " (" +
          std::to_string(kept_samples()) + " of " + std::to_string(num_samples) + " samples)";
   for (const SampleRange& r : kept) {
-    out += "\n  kept      " + Format("%9.3f", log.t_s[r.begin]) + " - " + Format("%9.3f s", log.t_s[r.end - 1]);
+    out += "\n  kept      " + FormatValue("%9.3f", log.t_s[r.begin]) + " - " + FormatValue("%9.3f s", log.t_s[r.end - 1]);
   }
   for (const ExcludedSpan& span : excluded) {
-    out += "\n  left out  " + Format("%9.3f", span.t_begin_s) + " - " + Format("%9.3f s", span.t_end_s) + "  " +
+    out += "\n  left out  " + FormatValue("%9.3f", span.t_begin_s) + " - " + FormatValue("%9.3f s", span.t_end_s) + "  " +
            ToString(span.reason) + (span.detail.empty() ? "" : ": " + span.detail);
   }
   return out;
@@ -314,17 +309,17 @@ Segmentation SegmentFlight(const FlightLog& log, const SegmentationOptions& o) {
       case ExclusionReason::kOnGround: {
         const bool by_height =
             std::any_of(below_clearance.begin() + a, below_clearance.begin() + b, [](char c) { return c != 0; });
-        span.detail = by_height ? "at rest or within " + Format("%.2f m", o.ground_clearance_m) +
+        span.detail = by_height ? "at rest or within " + FormatValue("%.2f m", o.ground_clearance_m) +
                                       " of the resting height (motion capture)"
-                                : "at rest with the rotors below " + Format("%.0f%%", 100 * o.ground_thrust_fraction) +
+                                : "at rest with the rotors below " + FormatValue("%.0f%%", 100 * o.ground_thrust_fraction) +
                                       " of hover thrust";
         break;
       }
       case ExclusionReason::kTakeoff:
-        span.detail = "first " + Format("%.2f s", o.takeoff_margin_s) + " after leaving the ground";
+        span.detail = "first " + FormatValue("%.2f s", o.takeoff_margin_s) + " after leaving the ground";
         break;
       case ExclusionReason::kLanding:
-        span.detail = "last " + Format("%.2f s", o.landing_margin_s) + " before reaching the ground";
+        span.detail = "last " + FormatValue("%.2f s", o.landing_margin_s) + " before reaching the ground";
         break;
       case ExclusionReason::kImpact: {
         double peak_acc = 0.0, peak_alpha = 0.0;
@@ -332,15 +327,15 @@ Segmentation SegmentFlight(const FlightLog& log, const SegmentationOptions& o) {
           peak_acc = std::max(peak_acc, log.acc_mps2.row(i).norm());
           peak_alpha = std::max(peak_alpha, alpha[i]);
         }
-        span.detail = "peak specific force " + Format("%.1f g", peak_acc / g) + ", peak angular acceleration " +
-                      Format("%.0f rad/s^2", peak_alpha);
+        span.detail = "peak specific force " + FormatValue("%.1f g", peak_acc / g) + ", peak angular acceleration " +
+                      FormatValue("%.0f rad/s^2", peak_alpha);
         break;
       }
       case ExclusionReason::kGyroLimit: {
         double peak = 0.0;
         for (int i = a; i < b; ++i) peak = std::max(peak, log.gyro_radps.row(i).cwiseAbs().maxCoeff());
-        span.detail = "peak " + Format("%.1f rad/s", peak) + Format(" (%.0f deg/s)", peak * 180.0 / kPi) + " > " +
-                      Format("%.1f rad/s", o.gyro_limit_radps);
+        span.detail = "peak " + FormatValue("%.1f rad/s", peak) + FormatValue(" (%.0f deg/s)", peak * 180.0 / kPi) + " > " +
+                      FormatValue("%.1f rad/s", o.gyro_limit_radps);
         break;
       }
       case ExclusionReason::kMotorSaturation: {
@@ -352,13 +347,13 @@ Segmentation SegmentFlight(const FlightLog& log, const SegmentationOptions& o) {
           }
         }
         const std::string at_limit = is_command ? " at full command" : " at its speed limit";
-        span.detail = rotors.empty() ? "within " + Format("%.2f s", o.saturation_margin_s) + " of a rotor" + at_limit
+        span.detail = rotors.empty() ? "within " + FormatValue("%.2f s", o.saturation_margin_s) + " of a rotor" + at_limit
                                      : "rotor " + rotors + at_limit;
         break;
       }
       case ExclusionReason::kShortSegment:
         span.detail =
-            "kept stretch of " + Format("%.2f s", t[b - 1] - t[a]) + " < " + Format("%.2f s", o.min_segment_s);
+            "kept stretch of " + FormatValue("%.2f s", t[b - 1] - t[a]) + " < " + FormatValue("%.2f s", o.min_segment_s);
         break;
       case ExclusionReason::kLoggingGap:
         break;
@@ -373,7 +368,7 @@ Segmentation SegmentFlight(const FlightLog& log, const SegmentationOptions& o) {
     gap.t_begin_s = t[i - 1];
     gap.t_end_s = t[i];
     gap.reason = ExclusionReason::kLoggingGap;
-    gap.detail = "no samples for " + Format("%.3f s", t[i] - t[i - 1]);
+    gap.detail = "no samples for " + FormatValue("%.3f s", t[i] - t[i - 1]);
     result.excluded.push_back(std::move(gap));
   }
   std::stable_sort(result.excluded.begin(), result.excluded.end(), [](const ExcludedSpan& x, const ExcludedSpan& y) {

@@ -15,7 +15,7 @@
 namespace rotorid {
 namespace {
 
-constexpr uint8_t kMagic[7] = {0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35};  // "ULog" 0x01 0x12 0x35
+constexpr uint8_t kULogMagic[7] = {0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35};  // "ULog" 0x01 0x12 0x35
 constexpr size_t kHeaderBytes = 16;
 constexpr size_t kMessageHeaderBytes = 3;  // uint16 msg_size, uint8 msg_type
 // Nested types deeper than this are treated as a (recursive) corrupt definition; PX4 uses two or three.
@@ -343,7 +343,7 @@ class ULogParser {
   void ParseHeader() {
     if (size_ < kHeaderBytes)
       Fail(0, "file is " + std::to_string(size_) + " bytes, shorter than the 16-byte ULog header");
-    if (std::memcmp(data_, kMagic, sizeof(kMagic)) != 0) Fail(0, "not a ULog file (bad magic bytes)");
+    if (std::memcmp(data_, kULogMagic, sizeof(kULogMagic)) != 0) Fail(0, "not a ULog file (bad magic bytes)");
     log_.file_version = data_[7];
     if (log_.file_version > 1)
       log_.warnings.push_back("ULog file version " + std::to_string(log_.file_version) + " is newer than 1; read as 1");

@@ -13,7 +13,7 @@ namespace {
 
 constexpr const char* kBodyNames[] = {"ms_x", "ms_y", "ms_z", "I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz"};
 
-std::string Number(double x) {
+std::string PreciseNumber(double x) {
   std::ostringstream out;
   out << std::setprecision(9) << x;
   return out.str();
@@ -25,7 +25,7 @@ std::string Element(const std::string& name, const std::string& value, int inden
 
 // "identified: 0.021 +- 0.002" or "not identified: PX4's default", for the comments of an export.
 std::string Provenance(const IdentifiedModel& model, const std::string& effect, const std::string& fallback) {
-  if (const auto v = model.Effect(effect)) return effect + " identified: " + Number(*v);
+  if (const auto v = model.Effect(effect)) return effect + " identified: " + PreciseNumber(*v);
   return effect + " not identified: " + fallback;
 }
 
@@ -33,26 +33,26 @@ std::string MotorPlugin(const IdentifiedModel& model, int i) {
   const Rotor& rotor = model.vehicle.rotors[static_cast<size_t>(i)];
   const double kt = model.Value("kt");
   const std::string n = std::to_string(i);
-  std::string xml = "    <!-- rotor " + std::to_string(i + 1) + " at (" + Number(rotor.position_m.x()) + ", " +
-                    Number(rotor.position_m.y()) + ", " + Number(rotor.position_m.z()) + ") m in the body frame -->\n";
+  std::string xml = "    <!-- rotor " + std::to_string(i + 1) + " at (" + PreciseNumber(rotor.position_m.x()) + ", " +
+                    PreciseNumber(rotor.position_m.y()) + ", " + PreciseNumber(rotor.position_m.z()) + ") m in the body frame -->\n";
   xml += "    <plugin name=\"rotor_" + n + "_motor_model\" filename=\"libgazebo_motor_model.so\">\n";
   xml += Element("robotNamespace", "", 6) + Element("jointName", "rotor_" + n + "_joint", 6) +
          Element("linkName", "rotor_" + n, 6) + Element("turningDirection", rotor.spin > 0 ? "ccw" : "cw", 6);
   const auto tau = model.Effect("motor_tau_s");
   xml += "      <!-- " + Provenance(model, "motor_tau_s", "PX4's defaults 0.0125 s up, 0.025 s down") + " -->\n";
-  xml += Element("timeConstantUp", Number(tau ? *tau : 0.0125), 6) +
-         Element("timeConstantDown", Number(tau ? *tau : 0.025), 6);
+  xml += Element("timeConstantUp", PreciseNumber(tau ? *tau : 0.0125), 6) +
+         Element("timeConstantDown", PreciseNumber(tau ? *tau : 0.025), 6);
   if (model.max_rotor_speed_radps > 0.0)
-    xml += Element("maxRotVelocity", Number(model.max_rotor_speed_radps), 6);
+    xml += Element("maxRotVelocity", PreciseNumber(model.max_rotor_speed_radps), 6);
   else
     xml += "      <!-- maxRotVelocity: unknown (give --max-rotor-speed or a command_to_speed map) -->\n";
-  xml += Element("motorConstant", Number(kt), 6) + Element("momentConstant", Number(model.Value("kd") / kt), 6);
+  xml += Element("motorConstant", PreciseNumber(kt), 6) + Element("momentConstant", PreciseNumber(model.Value("kd") / kt), 6);
   xml += Element("commandSubTopic", "/gazebo/command/motor_speed", 6) + Element("motorNumber", n, 6);
   for (const auto& [effect, element] :
        {std::pair<std::string, std::string>{"rotor_drag_coefficient", "rotorDragCoefficient"},
         {"flapping_moment_coefficient", "rollingMomentCoefficient"}}) {
     if (const auto v = model.Effect(effect))
-      xml += Element(element, Number(*v), 6);
+      xml += Element(element, PreciseNumber(*v), 6);
     else
       xml += "      <!-- " + element + ": " + effect + " not identified, the plugin's default applies -->\n";
   }
@@ -123,13 +123,13 @@ std::string GazeboSdf(const IdentifiedModel& model) {
                     model.vehicle.name + "\">\n";
   xml += "    <link name=\"base_link\">\n      <inertial>\n";
   xml += Element("pose",
-                 Number(p.centre_of_mass_m.x()) + " " + Number(p.centre_of_mass_m.y()) + " " +
-                     Number(p.centre_of_mass_m.z()) + " 0 0 0",
+                 PreciseNumber(p.centre_of_mass_m.x()) + " " + PreciseNumber(p.centre_of_mass_m.y()) + " " +
+                     PreciseNumber(p.centre_of_mass_m.z()) + " 0 0 0",
                  8);
-  xml += Element("mass", Number(p.mass_kg), 8) + "        <inertia>\n";
-  xml += Element("ixx", Number(I(0, 0)), 10) + Element("ixy", Number(I(0, 1)), 10) +
-         Element("ixz", Number(I(0, 2)), 10) + Element("iyy", Number(I(1, 1)), 10) +
-         Element("iyz", Number(I(1, 2)), 10) + Element("izz", Number(I(2, 2)), 10);
+  xml += Element("mass", PreciseNumber(p.mass_kg), 8) + "        <inertia>\n";
+  xml += Element("ixx", PreciseNumber(I(0, 0)), 10) + Element("ixy", PreciseNumber(I(0, 1)), 10) +
+         Element("ixz", PreciseNumber(I(0, 2)), 10) + Element("iyy", PreciseNumber(I(1, 1)), 10) +
+         Element("iyz", PreciseNumber(I(1, 2)), 10) + Element("izz", PreciseNumber(I(2, 2)), 10);
   xml += "        </inertia>\n      </inertial>\n    </link>\n";
   for (int i = 0; i < model.vehicle.num_rotors(); ++i) xml += MotorPlugin(model, i);
   return xml + "  </model>\n</sdf>\n";
@@ -151,9 +151,9 @@ std::string Px4SihParameters(const IdentifiedModel& model) {
   }
   const double w2 = model.max_rotor_speed_radps * model.max_rotor_speed_radps;
   std::string out = "# rotorid export: " + model.source + " (" + model.block + " parameters), vehicle '" +
-                    model.vehicle.name + "', max rotor speed " + Number(model.max_rotor_speed_radps) + " rad/s\n";
+                    model.vehicle.name + "', max rotor speed " + PreciseNumber(model.max_rotor_speed_radps) + " rad/s\n";
   const auto set = [&out](const std::string& name, double value) {
-    out += "param set " + name + " " + Number(value) + "\n";
+    out += "param set " + name + " " + PreciseNumber(value) + "\n";
   };
   set("SIH_MASS", p.mass_kg);
   set("SIH_IXX", I(0, 0));

@@ -8,24 +8,23 @@
 
 namespace rotorid {
 
-namespace {
-// JSON has no NaN or infinity: they become null.
-nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-}  // namespace
+nlohmann::json JsonNumber(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
 
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
   nlohmann::json out = nlohmann::json::object();
   for (size_t k = 0; k < names.size(); ++k) {
-    nlohmann::json entry = {{"value", Number(solution.chi[k])},
-                            {"std", Number(solution.std[k])},
-                            {"rel_std_pct", Number(solution.rel_std_pct[k])},
+    nlohmann::json entry = {{"value", JsonNumber(solution.chi[k])},
+                            {"std", JsonNumber(solution.std[k])},
+                            {"rel_std_pct", JsonNumber(solution.rel_std_pct[k])},
                             {"essential", static_cast<bool>(solution.essential[k])}};
     for (const DiscardedParameter& d : solution.discarded) {
       if (d.name != names[k]) continue;
-      entry["std"] = Number(d.std);
-      entry["estimate_when_discarded"] = Number(d.value);
+      entry["std"] = JsonNumber(d.std);
+      entry["estimate_when_discarded"] = JsonNumber(d.value);
       entry["most_correlated_with"] = d.most_correlated;
-      entry["correlation"] = Number(d.correlation);
+      entry["correlation"] = JsonNumber(d.correlation);
     }
     out[names[k]] = entry;
   }
@@ -35,13 +34,13 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
 nlohmann::json ComponentsJson(const std::vector<std::optional<double>>& values) {
   nlohmann::json out = nlohmann::json::object();
   for (size_t j = 0; j < values.size() && j < kWrenchComponentNames.size(); ++j)
-    out[kWrenchComponentNames[j]] = values[j] ? Number(*values[j]) : nlohmann::json(nullptr);
+    out[kWrenchComponentNames[j]] = values[j] ? JsonNumber(*values[j]) : nlohmann::json(nullptr);
   return out;
 }
 
 nlohmann::json VectorJson(const Eigen::VectorXd& v) {
   nlohmann::json out = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(Number(v[i]));
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(JsonNumber(v[i]));
   return out;
 }
 
@@ -86,7 +85,7 @@ nlohmann::json FlightFitJson(const FlightFit& fit) {
           {"duration_s", fit.duration_s},
           {"excitation", {{"angular_acceleration_rms", VectorJson(e.angular_acceleration_rms)},
                           {"angular_velocity_rms", VectorJson(e.angular_velocity_rms)},
-                          {"thrust_variation_pct", Number(e.thrust_variation_pct)}}},
+                          {"thrust_variation_pct", JsonNumber(e.thrust_variation_pct)}}},
           {"relative_error_pct", ComponentsJson(fit.relative_error_pct)},
           {"mean_force_residual_n", VectorJson(fit.mean_force_residual_n)}};
 }
@@ -96,9 +95,9 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
   nlohmann::json discarded = nlohmann::json::array();
   for (const DiscardedParameter& d : s.discarded)
     discarded.push_back({{"name", d.name},
-                         {"rel_std_pct", Number(d.rel_std_pct)},
+                         {"rel_std_pct", JsonNumber(d.rel_std_pct)},
                          {"most_correlated_with", d.most_correlated},
-                         {"correlation", Number(d.correlation)},
+                         {"correlation", JsonNumber(d.correlation)},
                          {"reason", d.reason}});
   nlohmann::json flights = nlohmann::json::array();
   for (const FlightFit& fit : result.per_flight) flights.push_back(FlightFitJson(fit));
@@ -107,9 +106,9 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
           {"relative_error_pct", ComponentsJson(result.relative_error_pct)},
           {"discarded", discarded},
           {"flights", flights},
-          {"statistics", {{"sigma_w", Number(s.sigma_w)},
+          {"statistics", {{"sigma_w", JsonNumber(s.sigma_w)},
                           {"singular_values", VectorJson(s.singular_values)},
-                          {"scale_entry", Number(s.scale_entry)},
+                          {"scale_entry", JsonNumber(s.scale_entry)},
                           {"iterations", s.iterations},
                           {"rows", result.system.w.rows()}}},
           {"warnings", result.warnings}};

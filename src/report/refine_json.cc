@@ -6,9 +6,6 @@
 
 namespace rotorid {
 
-namespace {
-nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-}  // namespace
 
 nlohmann::json RefineOptionsJson(const RefineOptions& options) {
   nlohmann::json effects = nlohmann::json::array();
@@ -37,9 +34,9 @@ nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const s
     };
     const std::vector<std::string>& labels = kind->info().labels;
     if (!labels.empty()) {  // one key per coefficient, as INTERFACE.md names them
-      for (size_t k = 0; k < labels.size(); ++k) out[labels[k]] = entry(Number(at(v, k)), Number(at(s, k)));
+      for (size_t k = 0; k < labels.size(); ++k) out[labels[k]] = entry(JsonNumber(at(v, k)), JsonNumber(at(s, k)));
     } else if (kind->FixedDimension() == 1) {
-      out[EffectParameterName(kind)] = entry(Number(v[0]), Number(s[0]));
+      out[EffectParameterName(kind)] = entry(JsonNumber(v[0]), JsonNumber(s[0]));
     } else {
       out[EffectParameterName(kind)] = entry(VectorJson(v), VectorJson(s));
     }
@@ -49,11 +46,11 @@ nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const s
 
 nlohmann::json SolverJson(const SolverReport& solver) {
   return {{"iterations", solver.iterations},
-          {"initial_cost", Number(solver.initial_cost)},
-          {"final_cost", Number(solver.final_cost)},
+          {"initial_cost", JsonNumber(solver.initial_cost)},
+          {"final_cost", JsonNumber(solver.final_cost)},
           {"termination", solver.termination},
           {"message", solver.message},
-          {"seconds", Number(solver.seconds)}};
+          {"seconds", JsonNumber(solver.seconds)}};
 }
 
 nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResult& refined) {
@@ -61,15 +58,15 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
   for (Eigen::Index a = 0; a < refined.effect_correlation.rows(); ++a) {
     nlohmann::json row = nlohmann::json::array();
     for (Eigen::Index b = 0; b < refined.effect_correlation.cols(); ++b)
-      row.push_back(Number(refined.effect_correlation(a, b)));
+      row.push_back(JsonNumber(refined.effect_correlation(a, b)));
     correlation.push_back(row);
   }
   return {{"parameters", ParametersJson(linear.system.parameter_names, refined.refined)},
           {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled, refined.on_bound)},
           {"relative_error_pct", ComponentsJson(refined.relative_error_pct)},
           {"effect_correlation", {{"labels", refined.effect_labels}, {"matrix", correlation}}},
-          {"criterion", {{"linear", Number(refined.linear_criterion)}, {"refined", Number(refined.refined_criterion)}}},
-          {"autocorrelation_factor", Number(refined.autocorrelation_factor)},
+          {"criterion", {{"linear", JsonNumber(refined.linear_criterion)}, {"refined", JsonNumber(refined.refined_criterion)}}},
+          {"autocorrelation_factor", JsonNumber(refined.autocorrelation_factor)},
           {"solver", SolverJson(refined.solver)},
           {"warnings", refined.warnings}};
 }

@@ -18,6 +18,9 @@ inline constexpr const char* kRotoridVersion = "0.1.0";
 // {"value", "std", "rel_std_pct", "essential"} for every parameter of a solution; discarded
 // parameters have value 0 (as used by the model) and keep their estimate at the moment they were
 // dropped under "estimate_when_discarded".
+// A number for a report: JSON has no NaN or infinity, so they become null.
+nlohmann::json JsonNumber(double value);
+
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution);
 // {"Fx": null, "Fy": null, "Fz": 3.2, ...}
 nlohmann::json ComponentsJson(const std::vector<std::optional<double>>& values);

@@ -1,0 +1,14 @@
+#pragma once
+
+// Numbers in messages and reports.
+
+#include <string>
+
+namespace rotorid {
+
+// `value` through a printf format with one floating-point conversion ("%.2f s", "%.3g").
+std::string FormatValue(const char* printf_format, double value);
+// Three significant digits, as messages quote measured values.
+inline std::string ShortNumber(double value) { return FormatValue("%.3g", value); }
+
+}  // namespace rotorid
