@@ -21,7 +21,10 @@ FlightLog FlightLog::Slice(int begin, int end) const {
   out.gyro_radps = gyro_radps.middleRows(begin, n);
   out.acc_mps2 = acc_mps2.middleRows(begin, n);
   out.rotor_radps = rotor_radps.middleRows(begin, n);
-  if (mocap) out.mocap = MocapTrack{mocap->position_w_m.middleRows(begin, n), mocap->bryant_rad.middleRows(begin, n)};
+  if (mocap) {
+    out.mocap = MocapTrack{mocap->position_w_m.middleRows(begin, n), mocap->bryant_rad.middleRows(begin, n)};
+    if (mocap->velocity_w_mps) out.mocap->velocity_w_mps = mocap->velocity_w_mps->middleRows(begin, n);
+  }
   if (voltage_v) out.voltage_v = voltage_v->segment(begin, n);
   if (rotor_command) out.rotor_command = rotor_command->middleRows(begin, n);
   out.gravity_mps2 = gravity_mps2;

@@ -146,7 +146,11 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     const Eigen::MatrixXd eta = FiltFiltColumns(filter, InterpolateLinear(log.t_s, angles, out.t_s));
     const Eigen::MatrixXd position =
         FiltFiltColumns(filter, InterpolateLinear(log.t_s, log.mocap->position_w_m, out.t_s));
-    const Eigen::MatrixXd velocity_w = FourthOrderCentralDifference(position, dt);
+    // The log's own velocity where it has one (an estimator's), else the differentiated position.
+    const Eigen::MatrixXd velocity_w =
+        log.mocap->velocity_w_mps
+            ? FiltFiltColumns(filter, InterpolateLinear(log.t_s, *log.mocap->velocity_w_mps, out.t_s))
+            : FourthOrderCentralDifference(position, dt);
     out.velocity_mps = Eigen::MatrixX3d(n, 3);
     for (int i = 0; i < n; ++i)
       out.velocity_mps->row(i) =

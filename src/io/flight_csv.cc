@@ -211,7 +211,16 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
     } else {
       throw Error(Located(source, header_line, 0, "pos_x..z given without roll,pitch,yaw or qw,qx,qy,qz"));
     }
+    if (columns->Find("vel_x")) {
+      Eigen::MatrixX3d velocity(n, 3);
+      for (int a = 0; a < 3; ++a) velocity.col(a) = column(require(std::string("vel_") + axes[a]));
+      mocap.velocity_w_mps = std::move(velocity);
+    }
     log.mocap = std::move(mocap);
+  } else if (const auto k = columns->Find("vel_x")) {
+    throw Error(Located(source, header_line, CellColumn(header_text, *k),
+                        "vel_x..z (world frame) need the pose (pos_x..z with roll,pitch,yaw or qw,qx,qy,qz) to be "
+                        "turned into the body frame"));
   }
   if (const auto k = columns->Find("voltage")) log.voltage_v = column(*k);
   if (const auto it = log.metadata.find("gravity"); it != log.metadata.end()) {
@@ -240,6 +249,7 @@ std::string FlightLogToCsv(const FlightLog& log) {
   out += "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z";
   for (int r = 0; r < log.num_rotors(); ++r) out += ",rotor_" + std::to_string(r + 1);
   if (log.mocap) out += ",pos_x,pos_y,pos_z,roll,pitch,yaw";
+  if (log.mocap && log.mocap->velocity_w_mps) out += ",vel_x,vel_y,vel_z";
   if (log.voltage_v) out += ",voltage";
   out += "\n";
   out.reserve(out.size() + static_cast<size_t>(log.num_samples()) * (16 + 12 * (6 + log.num_rotors())));
@@ -255,6 +265,8 @@ std::string FlightLogToCsv(const FlightLog& log) {
     if (log.mocap) {
       for (int a = 0; a < 3; ++a) add(log.mocap->position_w_m(i, a));
       for (int a = 0; a < 3; ++a) add(log.mocap->bryant_rad(i, a));
+      if (log.mocap->velocity_w_mps)
+        for (int a = 0; a < 3; ++a) add((*log.mocap->velocity_w_mps)(i, a));
     }
     if (log.voltage_v) add((*log.voltage_v)[i]);
     out += '\n';

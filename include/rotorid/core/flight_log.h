@@ -13,6 +13,9 @@ namespace rotorid {
 struct MocapTrack {
   Eigen::MatrixX3d position_w_m;  // position of O_d in the world frame (z up)
   Eigen::MatrixX3d bryant_rad;    // roll, pitch, yaw with R = Rz(yaw) Ry(pitch) Rx(roll)
+  // Velocity of O_d in the world frame where the log gives it (an estimator's); without it the
+  // velocity is the differentiated position.
+  std::optional<Eigen::MatrixX3d> velocity_w_mps = std::nullopt;
 };
 
 // One flight on one time base (INTERFACE.md section 2). Rows are samples.
