@@ -10,6 +10,7 @@
 #include "diagnosis/held_out.h"
 #include "diagnosis/linearization.h"
 #include "rotorid/core/error.h"
+#include "rotorid/model/parameters.h"
 #include "rotorid/refine/refine.h"
 
 namespace rotorid {
@@ -27,8 +28,6 @@ std::string GapLocationOptions::Validate() const {
 }
 
 namespace {
-
-constexpr int kGapComponents = 6;
 
 double RowRateHz(const ProcessedFlight& flight) {
   const int n = flight.num_rows_samples();
@@ -106,7 +105,7 @@ GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::st
     const double rate = RowRateHz(flight);
     highest_rate = std::max(highest_rate, rate);
     total_rows += static_cast<double>(flight.num_rows_samples());
-    for (int j = 0; j < kGapComponents; ++j) {
+    for (int j = 0; j < kNumWrenchComponents; ++j) {
       const std::vector<double> r = BandEnergies(baseline.back().residual.col(j), rate, options.bands);
       const std::vector<double> f = BandEnergies(final_residual.residual.col(j), rate, options.bands);
       const std::vector<double> m = BandEnergies(baseline.back().rotor_wrench.col(j), rate, options.bands);
@@ -127,8 +126,8 @@ GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::st
     band.residual_rms = (residual_energy[b] / rows).cwiseSqrt();
     band.final_residual_rms = (final_energy[b] / rows).cwiseSqrt();
     band.model_rms = (model_energy[b] / rows).cwiseSqrt();
-    band.residual_to_model_pct.resize(kGapComponents);
-    for (int j = 0; j < kGapComponents; ++j) {
+    band.residual_to_model_pct.resize(kNumWrenchComponents);
+    for (int j = 0; j < kNumWrenchComponents; ++j) {
       band.share_pct[j] = residual_total[j] > 0.0 ? 100.0 * residual_energy[b][j] / residual_total[j] : 0.0;
       if (band.model_rms[j] > 1e-12 * std::max(1.0, band.residual_rms[j]) && model_energy[b][j] > 0.0)
         band.residual_to_model_pct[j] = 100.0 * band.residual_rms[j] / band.model_rms[j];
@@ -159,7 +158,7 @@ GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::st
       for (int r = 0; r < n; ++r) {
         if (time(r) < start || time(r) >= end) continue;
         ++rows;
-        for (int j = 0; j < kGapComponents; ++j) {
+        for (int j = 0; j < kNumWrenchComponents; ++j) {
           residual_sq[j] += residual.residual(r, j) * residual.residual(r, j);
           wrench_sq[j] += residual.rotor_wrench(r, j) * residual.rotor_wrench(r, j);
           const double scaled = residual.residual(r, j) / scale[j];
@@ -174,7 +173,7 @@ GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::st
       w.flight = flight.source;
       w.start_s = start;
       w.end_s = end;
-      w.mean_square_ratio = scaled_sq.sum() / (kGapComponents * rows);
+      w.mean_square_ratio = scaled_sq.sum() / (kNumWrenchComponents * rows);
       scaled_sq.maxCoeff(&w.dominant_component);
       w.relative_error_pct = internal::RelativeErrorFromSums(residual_sq, wrench_sq);
       w.angular_velocity_rms = (rate_sq / rows).cwiseSqrt();

@@ -19,8 +19,6 @@ namespace rotorid::internal {
 
 namespace {
 
-constexpr int kLinearizedComponents = kNumWrenchComponents;
-
 // Column of W that a named parameter multiplies in this flight, or -1.
 int ColumnOf(const std::string& name, const Vehicle& vehicle) {
   for (int k = 0; k < kNumRotorCoefficients; ++k)
@@ -57,13 +55,13 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
                           const Effects& effects) {
   const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(flight, effects);
   const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
-  const Eigen::Index rows = w.rows() / kLinearizedComponents;
+  const Eigen::Index rows = w.rows() / kNumWrenchComponents;
   FlightResidual out;
-  out.residual.resize(rows, kLinearizedComponents);
-  out.rotor_wrench.resize(rows, kLinearizedComponents);
+  out.residual.resize(rows, kNumWrenchComponents);
+  out.rotor_wrench.resize(rows, kNumWrenchComponents);
   for (Eigen::Index r = 0; r < rows; ++r)
-    for (int j = 0; j < kLinearizedComponents; ++j) {
-      const Eigen::Index i = kLinearizedComponents * r + j;
+    for (int j = 0; j < kNumWrenchComponents; ++j) {
+      const Eigen::Index i = kNumWrenchComponents * r + j;
       out.residual(r, j) = w.row(i).dot(chi_t);
       out.rotor_wrench(r, j) = -(w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1]);
     }
@@ -86,14 +84,14 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
       out.column_kind.push_back(static_cast<int>(k));
     }
   Eigen::Index total_rows = 0;
-  for (const ProcessedFlight& f : flights) total_rows += kLinearizedComponents * f.num_rows_samples();
+  for (const ProcessedFlight& f : flights) total_rows += kNumWrenchComponents * f.num_rows_samples();
   const Eigen::Index p = static_cast<Eigen::Index>(free_parameters.size());
   const Eigen::Index e = static_cast<Eigen::Index>(out.labels.size());
   out.residual.resize(total_rows);
   out.parameter_jacobian.setZero(total_rows, p);
   out.effect_jacobian.setZero(total_rows, e);
   out.row_component.resize(total_rows);
-  std::vector<std::vector<Eigen::VectorXd>> component_series(kLinearizedComponents);
+  std::vector<std::vector<Eigen::VectorXd>> component_series(kNumWrenchComponents);
 
   Eigen::Index offset = 0;
   std::vector<EffectKind> rotor_kinds;
@@ -105,23 +103,23 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     const Eigen::Index rows = w.rows();
     const Eigen::VectorXd rho = w * chi_t;
     // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
-    Eigen::Matrix<double, kLinearizedComponents, 1> scale;
-    for (int j = 0; j < kLinearizedComponents; ++j) {
+    Eigen::Matrix<double, kNumWrenchComponents, 1> scale;
+    for (int j = 0; j < kNumWrenchComponents; ++j) {
       double sum = 0.0, rotor = 0.0;
-      for (Eigen::Index i = j; i < rows; i += kLinearizedComponents) {
+      for (Eigen::Index i = j; i < rows; i += kNumWrenchComponents) {
         sum += rho[i] * rho[i];
         rotor += std::pow(w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1], 2);
       }
-      const double rms = std::sqrt(sum / std::max<Eigen::Index>(1, rows / kLinearizedComponents));
+      const double rms = std::sqrt(sum / std::max<Eigen::Index>(1, rows / kNumWrenchComponents));
       scale[j] = rms > 0.0 ? rms : 1.0;
       if (j >= 2 && rotor == 0.0) {
         scale[j] = std::numeric_limits<double>::infinity();
       } else {
-        out.scored_rows += rows / kLinearizedComponents;
+        out.scored_rows += rows / kNumWrenchComponents;
       }
     }
     for (Eigen::Index i = 0; i < rows; ++i) {
-      const int j = static_cast<int>(i % kLinearizedComponents);
+      const int j = static_cast<int>(i % kNumWrenchComponents);
       out.row_component[offset + i] = j;
       out.residual[offset + i] = rho[i] / scale[j];
     }
@@ -129,7 +127,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
       const int column = ColumnOf(free_parameters[c], flight.vehicle);
       if (column < 0) continue;
       for (Eigen::Index i = 0; i < rows; ++i)
-        out.parameter_jacobian(offset + i, c) = w(i, column) / scale[i % kLinearizedComponents];
+        out.parameter_jacobian(offset + i, c) = w(i, column) / scale[i % kNumWrenchComponents];
     }
     // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows).
     const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, rotor_kinds);
@@ -138,25 +136,25 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     for (int r = 0; r < flight.num_rows_samples(); ++r)
       for (size_t first = 0; first < coordinates; first += kWideImuJetSize) {
         const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows = model.Rows<WideImuJet>(r, first);
-        for (int j = 0; j < kLinearizedComponents; ++j) {
+        for (int j = 0; j < kNumWrenchComponents; ++j) {
           WideImuJet rho_jet(0.0);
           for (int k = 0; k < kNumIdimColumns; ++k) rho_jet += jet_rows(j, k) * chi_t[k];
           for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c)
-            out.effect_jacobian(offset + kLinearizedComponents * r + j, static_cast<Eigen::Index>(c)) =
+            out.effect_jacobian(offset + kNumWrenchComponents * r + j, static_cast<Eigen::Index>(c)) =
                 rho_jet.v[c - first] / scale[j];
         }
       }
-    for (int j = 0; j < kLinearizedComponents; ++j) {
+    for (int j = 0; j < kNumWrenchComponents; ++j) {
       if (std::isinf(scale[j])) continue;
-      Eigen::VectorXd series(rows / kLinearizedComponents);
-      for (Eigen::Index r = 0; r < series.size(); ++r) series[r] = out.residual[offset + kLinearizedComponents * r + j];
+      Eigen::VectorXd series(rows / kNumWrenchComponents);
+      for (Eigen::Index r = 0; r < series.size(); ++r) series[r] = out.residual[offset + kNumWrenchComponents * r + j];
       component_series[j].push_back(std::move(series));
     }
     offset += rows;
   }
   double factor = 0.0;
   int scored_components = 0;
-  for (int j = 0; j < kLinearizedComponents; ++j) {
+  for (int j = 0; j < kNumWrenchComponents; ++j) {
     if (component_series[j].empty()) continue;
     factor += AutocorrelationFactor(component_series[j]);
     ++scored_components;

@@ -8,6 +8,7 @@
 
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
+#include "rotorid/core/units.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/model/parameters.h"
 
@@ -39,8 +40,6 @@ std::string FailedCheckMessages(const std::vector<Check>& checks) {
 namespace {
 
 constexpr double kAirDensityKgpm3 = 1.225;
-constexpr double kRpmPerRadps = 60.0 / (2.0 * M_PI);
-constexpr double kDegPerRad = 180.0 / M_PI;
 
 double Median(std::vector<double> values) {
   if (values.empty()) return 0.0;
@@ -203,7 +202,7 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
     *plausible_kt = m.rotor_is_speed;
     return {"vehicle_scale", CheckStatus::kOk, source + ": " + measured};
   }
-  const double rpm_thrust = thrust / (kRpmPerRadps * kRpmPerRadps);
+  const double rpm_thrust = thrust * kRpmToRadps * kRpmToRadps;
   std::string cause;
   if (fits(mass / 1000.0, r, thrust))
     cause = "the mass in " + VehicleFile(v) + " appears to be in grams: give it in kg";
@@ -211,7 +210,7 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
     cause = "the rotor positions in " + VehicleFile(v) + " appear to be in mm: give them in m";
   else if (m.rotor_is_speed && fits(mass, r, rpm_thrust))
     cause = "the rotor speeds of " + source + " appear to be in rpm: give |Omega| in rad/s (multiply by " +
-            ShortNumber(1.0 / kRpmPerRadps) + ")";
+            ShortNumber(kRpmToRadps) + ")";
   else
     cause = "mass, rotor positions and rotor speeds do not fit a multirotor: check their units (kg, m, rad/s) in " +
             VehicleFile(v) + " and " + source;
@@ -281,11 +280,11 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
   if (ratio >= t.inertia_ratio_low && ratio <= t.inertia_ratio_high) {
     checks.push_back({"gyro_units", CheckStatus::kOk, source + ": " + inertia});
   } else {
-    const bool degrees = ratio * kDegPerRad >= t.inertia_ratio_low && ratio * kDegPerRad <= t.inertia_ratio_high;
+    const bool degrees = ratio * kRadToDeg >= t.inertia_ratio_low && ratio * kRadToDeg <= t.inertia_ratio_high;
     checks.push_back({"gyro_units", CheckStatus::kError,
                       source + ": " +
                           (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
-                                         ShortNumber(1.0 / kDegPerRad) + ")"
+                                         ShortNumber(kDegToRad) + ")"
                                    : "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)") +
                           " (" + inertia + ")"});
   }

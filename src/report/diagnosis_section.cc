@@ -27,7 +27,7 @@ std::string StatusTag(const std::string& status) {
 }
 
 std::string BandLabel(const JsonNode& band) {
-  return Format("%.0f", band["low_hz"].Number()) + "&ndash;" + Format("%.0f", band["high_hz"].Number()) + " Hz";
+  return FormatValue("%.0f", band["low_hz"].Number()) + "&ndash;" + FormatValue("%.0f", band["high_hz"].Number()) + " Hz";
 }
 
 // "value ± std unit" per parameter of a ranking entry's magnitude, one per line.
@@ -59,7 +59,7 @@ std::string RankingTable(const JsonNode& report) {
             Pct(entry["shrink_pct"].Number()) + "</td><td class=\"num\">" + MagnitudeCell(entry["magnitude"]) +
             "</td><td class=\"num\">" + DetectableCell(entry["detectable_above"]) + "</td><td class=\"num\">" +
             General(test["f_statistic"].Number()) + "</td><td class=\"num\">" +
-            Format("%.2g", test["p_value"].Number()) + "</td><td class=\"small note\">" + Html(entry["note"].String()) +
+            FormatValue("%.2g", test["p_value"].Number()) + "</td><td class=\"small note\">" + Html(entry["note"].String()) +
             "</td></tr>\n";
   }
   return html + "</tbody></table>\n";
@@ -99,7 +99,7 @@ std::string GapTables(const JsonNode& report) {
        {std::pair<const char*, JsonNode>{"linear model", baseline}, {"with the selected effects", final_gap}}) {
     rms += std::string("<tr><td>") + label + "</td>";
     const std::vector<std::optional<double>> v = block["residual_rms"].Components();
-    for (const int c : kAllComponents) rms += "<td class=\"num\">" + Format("%.4g", v[c].value_or(NAN)) + "</td>";
+    for (const int c : kAllComponents) rms += "<td class=\"num\">" + FormatValue("%.4g", v[c].value_or(NAN)) + "</td>";
     rms += "</tr>\n";
   }
   std::string header;
@@ -122,8 +122,8 @@ std::string BandTable(const JsonNode& where, int component) {
     const double before = band["residual_rms"][name].Number(), after = band["final_residual_rms"][name].Number();
     const std::optional<double> removed =
         before > 0.0 ? std::optional(100.0 * (1.0 - after * after / (before * before))) : std::nullopt;
-    html += "<tr><td class=\"num\">" + BandLabel(band) + "</td><td class=\"num\">" + Format("%.4g", before) +
-            "</td><td class=\"num\">" + Format("%.4g", after) + "</td><td class=\"num\">" + Pct(removed, 1) +
+    html += "<tr><td class=\"num\">" + BandLabel(band) + "</td><td class=\"num\">" + FormatValue("%.4g", before) +
+            "</td><td class=\"num\">" + FormatValue("%.4g", after) + "</td><td class=\"num\">" + Pct(removed, 1) +
             "</td><td class=\"num\">" + Pct(band["share_pct"][name].Number(), 1) + "</td><td class=\"num\">" +
             Pct(band["residual_to_model_pct"][name].NumberOrNull(), 1) + "</td></tr>\n";
   }
@@ -140,17 +140,17 @@ std::string StretchTable(const JsonNode& where) {
   for (const JsonNode& s : where["worst_stretches"].Elements()) {
     std::string rates;
     for (const double w : s["angular_velocity_rms"].Numbers())
-      rates += (rates.empty() ? "" : " / ") + Format("%.2f", w);
+      rates += (rates.empty() ? "" : " / ") + FormatValue("%.2f", w);
     std::string activities;
     for (const JsonNode& a : s["activities"].Elements())
       activities += (activities.empty() ? "" : ", ") + Html(a.String());
     const std::string flight = s["flight"].String();
     html += "<tr><td><code>" + Html(flight.substr(flight.find_last_of('/') + 1)) + "</code></td><td class=\"num\">" +
-            Format("%.1f", s["start_s"].Number()) + "</td><td class=\"num\">" + Format("%.1f", s["end_s"].Number()) +
-            "</td><td class=\"num\">" + Format("%.2f", s["mean_square_ratio"].Number()) + "&times;</td><td>" +
+            FormatValue("%.1f", s["start_s"].Number()) + "</td><td class=\"num\">" + FormatValue("%.1f", s["end_s"].Number()) +
+            "</td><td class=\"num\">" + FormatValue("%.2f", s["mean_square_ratio"].Number()) + "&times;</td><td>" +
             Html(s["dominant_component"].String()) + "</td>" +
             ComponentCells(s["relative_error_pct"].Components(), kRotorComponents) + "<td class=\"num\">" + rates +
-            "</td><td class=\"num\">" + Format("%+.2f", s["mean_vertical_acceleration_mps2"].Number()) + "</td><td>" +
+            "</td><td class=\"num\">" + FormatValue("%+.2f", s["mean_vertical_acceleration_mps2"].Number()) + "</td><td>" +
             activities + "</td></tr>\n";
   }
   return html + "</tbody></table>\n";
@@ -169,9 +169,9 @@ std::string ConfoundedTable(const JsonNode& report) {
     html += "<tr><td><code>" + Html(c["effects"][0].String()) + "</code></td><td><code>" +
             Html(c["effects"][1].String()) + "</code></td><td class=\"num\">" + Pct(c["shrink_pct"][0].Number()) +
             "</td><td class=\"num\">" + Pct(c["shrink_pct"][1].Number()) + "</td><td class=\"num\">" +
-            (correlation ? Format("%.3f", *correlation) : "&ndash;") + "</td><td class=\"num\">" +
-            Format("%.2f", c["t_statistic"].Number()) + "</td><td class=\"num\">" +
-            Format("%.2g", c["p_value"].Number()) + "</td><td>" + (c["distinguishable"].Bool() ? "yes" : "no") +
+            (correlation ? FormatValue("%.3f", *correlation) : "&ndash;") + "</td><td class=\"num\">" +
+            FormatValue("%.2f", c["t_statistic"].Number()) + "</td><td class=\"num\">" +
+            FormatValue("%.2g", c["p_value"].Number()) + "</td><td>" + (c["distinguishable"].Bool() ? "yes" : "no") +
             "</td><td class=\"small note\">" + Html(c["note"].String()) + "</td></tr>\n";
   }
   return html + "</tbody></table>\n";
@@ -219,7 +219,7 @@ std::vector<FigureSpec> DiagnosisFigures(const JsonNode& report) {
   const JsonNode where = report["where"];
   std::vector<BandBars> bands;
   for (const JsonNode& band : where["bands"].Elements())
-    bands.push_back({Format("%.0f", band["low_hz"].Number()) + "-" + Format("%.0f", band["high_hz"].Number()) + " Hz",
+    bands.push_back({FormatValue("%.0f", band["low_hz"].Number()) + "-" + FormatValue("%.0f", band["high_hz"].Number()) + " Hz",
                      band["residual_rms"].Components(), band["final_residual_rms"].Components()});
   if (!bands.empty())
     specs.push_back(Titled(

@@ -28,7 +28,6 @@ namespace rotorid {
 using internal::ComponentCells;
 using internal::ComponentHeader;
 using internal::FigureSpec;
-using internal::Format;
 using internal::General;
 using internal::Html;
 using internal::JsonNode;
@@ -324,7 +323,7 @@ std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
         "is drawn in green against the right-hand axis. One column per parameter set. "
         "When the model holds, blue and red lie on top of each other and the error looks like noise without "
         "structure. The right-hand column zooms into the " +
-        Format("%.0f", options_.zoom_window_s) +
+        FormatValue("%.0f", options_.zoom_window_s) +
         " s where the rotor wrench changes most (dashed frame on the left): there a lead or lag of the rotor model "
         "against the rigid body shows, and a refined set with a delay or motor lag should lie on the blue curve." +
         std::string(marks_[f].empty() ? "" : " Shaded: stretches the diagnosis points at.");
@@ -516,7 +515,7 @@ std::string ReportBuilder::FlightsSection() const {
     html += "<tr><td>" + Html(f.label) + "</td><td>" +
             (f.held_out ? "<span class=\"tag held\">held-out</span>" : "<span class=\"tag\">identification</span>") +
             "</td><td><code>" + Html(p.source) + "</code></td><td>" + Html(p.vehicle.name) + "</td><td class=\"num\">" +
-            General(p.vehicle.mass_kg) + "</td><td class=\"num\">" + Format("%.1f", duration) +
+            General(p.vehicle.mass_kg) + "</td><td class=\"num\">" + FormatValue("%.1f", duration) +
             "</td><td class=\"num\">" + std::to_string(p.num_rows_samples()) + "</td><td class=\"num\">" +
             General(p.weight) + "</td></tr>\n";
   }
@@ -622,10 +621,10 @@ std::string ReportBuilder::ParameterCells(const ParameterBlock& b, const std::st
     // carry it; fixed ones do not).
     std::string why;
     if (entry.Has("estimate_when_discarded"))
-      why = "estimate when discarded: " + Format("%.4g", entry["estimate_when_discarded"].Number());
+      why = "estimate when discarded: " + FormatValue("%.4g", entry["estimate_when_discarded"].Number());
     if (entry.Has("most_correlated_with") && !entry["most_correlated_with"].String().empty())
       why += std::string(why.empty() ? "" : "; ") + "most correlated with " + entry["most_correlated_with"].String() +
-             (entry.Has("correlation") ? " (r = " + Format("%.3f", entry["correlation"].Number()) + ")" : "");
+             (entry.Has("correlation") ? " (r = " + FormatValue("%.3f", entry["correlation"].Number()) + ")" : "");
     essential_cell = *discarded ? "<span class=\"tag nope\"" + (why.empty() ? "" : " title=\"" + Html(why) + "\"") +
                                       ">discarded</span>"
                                 : "<span class=\"tag yes\">yes</span>";
@@ -678,7 +677,7 @@ std::string ReportBuilder::ParametersSection() const {
       } else {
         const bool comparable = value && first_value && first_std && *first_std > 0.0 && !discarded;
         html += "<td class=\"num\">" +
-                (comparable ? Format("%+.2f", (*value - *first_value) / *first_std) : std::string("&ndash;")) + "</td>";
+                (comparable ? FormatValue("%+.2f", (*value - *first_value) / *first_std) : std::string("&ndash;")) + "</td>";
       }
     }
     html += "</tr>\n";
@@ -722,8 +721,8 @@ std::string ReportBuilder::RelativeErrorSection() const {
                                           : "<span class=\"tag\">identification</span>") +
               "</td><td>" + Html(input_.flights[f].flight->vehicle.name) + "</td><td>" +
               Html(input_.parameter_sets[s].label) + "</td>" + ComponentCells(split->relative_error_pct, {2, 3, 4, 5}) +
-              "<td class=\"num sep\">" + Format("%+.3f", mean_force[0]) + "</td><td class=\"num\">" +
-              Format("%+.3f", mean_force[1]) + "</td><td class=\"num\">" + Format("%+.3f", mean_force[2]) +
+              "<td class=\"num sep\">" + FormatValue("%+.3f", mean_force[0]) + "</td><td class=\"num\">" +
+              FormatValue("%+.3f", mean_force[1]) + "</td><td class=\"num\">" + FormatValue("%+.3f", mean_force[2]) +
               "</td></tr>\n";
     }
   }
@@ -811,7 +810,7 @@ std::string ReportBuilder::AblationSection() const {
       "</tr></thead><tbody>\n";
   for (const JsonNode& entry : rows)
     html += "<tr><td>" + Html(AblationLabel(entry)) + "</td><td class=\"num\">" +
-            Format("%.0f", entry["num_parameters"].Number()) + "</td><td class=\"num\">" +
+            FormatValue("%.0f", entry["num_parameters"].Number()) + "</td><td class=\"num\">" +
             General(entry["aic"].Number()) + "</td><td class=\"num\">" + General(entry["bic"].Number()) + "</td>" +
             ComponentCells(entry["relative_error_pct"].Components(), kRotorComponents) +
             (entry.Has("held_out_relative_error_pct")

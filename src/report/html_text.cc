@@ -36,20 +36,14 @@ std::string Html(const std::string& text) {
   return out;
 }
 
-std::string Format(const char* format, double v) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof(buffer), format, v);
-  return buffer;
-}
-
-std::string Sci(std::optional<double> v) { return v && std::isfinite(*v) ? Format("%.4e", *v) : "&ndash;"; }
+std::string Sci(std::optional<double> v) { return v && std::isfinite(*v) ? FormatValue("%.4e", *v) : "&ndash;"; }
 
 std::string Pct(std::optional<double> v, int digits) {
   if (!v || !std::isfinite(*v)) return "&ndash;";
-  return Format(digits == 1 ? "%.1f" : "%.2f", *v);
+  return FormatValue(digits == 1 ? "%.1f" : "%.2f", *v);
 }
 
-std::string General(double v) { return std::isfinite(v) ? Format("%.4g", v) : "&ndash;"; }
+std::string General(double v) { return std::isfinite(v) ? FormatValue("%.4g", v) : "&ndash;"; }
 
 std::string ComponentHeader(const std::vector<int>& components, const std::string& unit) {
   std::string out;

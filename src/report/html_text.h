@@ -6,12 +6,12 @@
 #include <string>
 #include <vector>
 
+#include "rotorid/core/text.h"
+
 namespace rotorid::internal {
 
 // `text` with &, <, >, " and ' escaped.
 std::string Html(const std::string& text);
-// printf of one number.
-std::string Format(const char* format, double v);
 // Parameter values: 4 significant digits in scientific notation, as the paper's tables; a dash
 // when absent or not finite.
 std::string Sci(std::optional<double> v);
