@@ -66,28 +66,4 @@ double FCritical(double alpha, double d1, double d2) {
   return 0.5 * (low + high);
 }
 
-double AutocorrelationFactor(const std::vector<Eigen::VectorXd>& series) {
-  Eigen::Index total = 0, longest = 0;
-  for (const Eigen::VectorXd& s : series) {
-    total += s.size();
-    longest = std::max(longest, s.size());
-  }
-  auto autocovariance = [&](Eigen::Index lag) {
-    double sum = 0.0;
-    for (const Eigen::VectorXd& s : series)
-      if (s.size() > lag) sum += s.head(s.size() - lag).dot(s.tail(s.size() - lag));
-    return sum;
-  };
-  const double c0 = autocovariance(0);
-  if (total < 20 || !(c0 > 0.0)) return 1.0;
-  const Eigen::Index max_lag = std::max<Eigen::Index>(1, std::min(total / 10, longest / 2));
-  Eigen::Index cut = 1;
-  while (cut < max_lag && autocovariance(cut) / c0 >= 0.1) ++cut;
-  const Eigen::Index lag = std::min(2 * cut, max_lag);
-  double factor = 1.0;
-  for (Eigen::Index l = 1; l <= lag; ++l)
-    factor += 2.0 * (1.0 - static_cast<double>(l) / static_cast<double>(lag + 1)) * autocovariance(l) / c0;
-  return std::max(factor, 1.0);
-}
-
 }  // namespace rotorid::internal

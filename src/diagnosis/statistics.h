@@ -1,11 +1,9 @@
 #pragma once
 
-// Small statistics the diagnosis needs (internal): the F distribution for the significance test
-// and the variance inflation of autocorrelated residuals for its effective sample size.
+// Small statistics the diagnosis needs (internal): the F distribution for the significance test.
+// The variance inflation of autocorrelated residuals is rotorid/signal/autocorrelation.h's.
 
-#include <vector>
-
-#include <Eigen/Core>
+#include "rotorid/signal/autocorrelation.h"
 
 namespace rotorid::internal {
 
@@ -17,11 +15,5 @@ double FSurvival(double f, double d1, double d2);
 
 // The f with P(F > f) = alpha, by bisection on FSurvival.
 double FCritical(double alpha, double d1, double d2);
-
-// Factor by which autocorrelation inflates the variance of a mean over these series (contiguous
-// pieces of one process, e.g. held-out blocks): 1 + 2 sum_l (1 - l/(L+1)) rho_l with the lag L
-// twice the first lag at which the pooled autocorrelation falls below 0.1 (Bartlett window, as the
-// refinement's). At least 1.
-double AutocorrelationFactor(const std::vector<Eigen::VectorXd>& series);
 
 }  // namespace rotorid::internal

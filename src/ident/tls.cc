@@ -9,6 +9,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/model/rigid_body.h"
+#include "rotorid/signal/autocorrelation.h"
 
 namespace rotorid {
 
@@ -25,6 +26,16 @@ std::string TlsOptions::Validate() const {
   if (!(max_rel_std_pct > 0.0)) return "the %sigma limit for essential parameters must be positive";
   if (max_iterations < 1) return "max_iterations must be at least 1";
   return {};
+}
+
+int IdimSystem::SystemColumn(int c, int k) const {
+  if (k < kNumRotorCoefficients) return k;
+  if (k < kNumRotorCoefficients + kNumBodyParameters) return ConfigColumn(c) + k - kNumRotorCoefficients;
+  return num_parameters();
+}
+
+void IdimSystem::PlaceFlightRows(int c, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const {
+  for (int k = 0; k < kNumIdimColumns; ++k) w->block(first_row, SystemColumn(c, k), wf.rows(), 1) = wf.col(k);
 }
 
 IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
@@ -52,17 +63,11 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
   system.w = Eigen::MatrixXd::Zero(total_rows, p + 1);
   system.row_group.reserve(total_rows);
   system.row_sample.reserve(total_rows);
-  // Column map from a single flight's 12 columns to the system's.
-  auto column_of = [&](int c, int k) {
-    if (k < kNumRotorCoefficients) return k;
-    if (k < kNumRotorCoefficients + kNumBodyParameters) return IdimSystem::ConfigColumn(c) + k - kNumRotorCoefficients;
-    return p;
-  };
   int row = 0;
   for (int f = 0; f < static_cast<int>(flights.size()); ++f) {
     const int c = system.flight_config[f];
     const Eigen::MatrixXd wf = BuildIdimMatrix(flights[f]);
-    for (int k = 0; k < kNumIdimColumns; ++k) system.w.block(row, column_of(c, k), wf.rows(), 1) = wf.col(k);
+    system.PlaceFlightRows(c, wf, row, &system.w);
     for (int i = 0; i < wf.rows(); ++i) {
       system.row_group.push_back(6 * f + i % 6);
       system.row_sample.push_back(i / 6);
@@ -71,25 +76,33 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
     for (const Eigen::MatrixXd& cov : IdimNoiseCovariance(flights[f])) {
       Eigen::MatrixXd mapped = Eigen::MatrixXd::Zero(p + 1, p + 1);
       for (int a = 0; a < kNumIdimColumns; ++a)
-        for (int b = 0; b < kNumIdimColumns; ++b) mapped(column_of(c, a), column_of(c, b)) += cov(a, b);
+        for (int b = 0; b < kNumIdimColumns; ++b) mapped(system.SystemColumn(c, a), system.SystemColumn(c, b)) += cov(a, b);
       system.group_noise_cov.push_back(mapped);
     }
   }
   return system;
 }
 
-std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t) {
-  std::vector<double> residual_sq(6, 0.0), rotor_sq(6, 0.0);
+void RelativeErrorSums::Add(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t) {
   for (Eigen::Index i = 0; i < w.rows(); ++i) {
     const double rho = w.row(i).dot(chi_t);
     const double rotor = w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1];
     residual_sq[i % 6] += rho * rho;
     rotor_sq[i % 6] += rotor * rotor;
   }
+}
+
+std::vector<std::optional<double>> RelativeErrorSums::Pct() const {
   std::vector<std::optional<double>> out(6);
   for (int j = 0; j < 6; ++j)
     if (rotor_sq[j] > 0.0) out[j] = 100.0 * std::sqrt(residual_sq[j] / rotor_sq[j]);
   return out;
+}
+
+std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t) {
+  RelativeErrorSums sums;
+  sums.Add(w, chi_t);
+  return sums.Pct();
 }
 
 namespace {
@@ -284,26 +297,18 @@ CoreSolve SolvePaper(const IdimSystem& system, const GroupFactors& factors, cons
 // falls below 0.1 (searched up to 200 samples), so the covariance accounts for the filter's and the
 // model error's memory.
 int AutocorrelationLag(const Eigen::VectorXd& r, const IdimSystem& system) {
-  constexpr int kMaxLag = 200;
-  int lag_max = 0;
+  constexpr Eigen::Index kMaxLag = 200;
+  Eigen::Index lag_max = 0;
   for (int j = 0; j < 6; ++j) {
     std::vector<double> series;
     for (Eigen::Index i = j; i < r.size(); i += 6)
       if (IdimSystem::Flight(system.row_group[i]) == 0) series.push_back(r[i]);
-    const int n = static_cast<int>(series.size());
-    if (n < 20) continue;
-    double c0 = 0.0;
-    for (double v : series) c0 += v * v;
-    if (c0 <= 0.0) continue;
-    int lag = 1;
-    for (; lag < std::min(n / 10, kMaxLag); ++lag) {
-      double c = 0.0;
-      for (int t = 0; t + lag < n; ++t) c += series[t] * series[t + lag];
-      if (c / c0 < 0.1) break;
-    }
-    lag_max = std::max(lag_max, lag);
+    const Eigen::Index n = static_cast<Eigen::Index>(series.size());
+    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(series.data(), n);
+    if (n < 20 || !(x.squaredNorm() > 0.0)) continue;
+    lag_max = std::max(lag_max, FirstLagBelow({x}, 0.1, std::min(n / 10, kMaxLag)));
   }
-  return std::max(2, 2 * lag_max);
+  return static_cast<int>(std::max<Eigen::Index>(2, 2 * lag_max));
 }
 
 // Bound on how far the fixed point may lower a group's residual variance below the full model's

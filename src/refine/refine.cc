@@ -16,6 +16,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/refine/effect_model.h"
+#include "rotorid/signal/autocorrelation.h"
 
 namespace rotorid {
 
@@ -47,20 +48,10 @@ std::map<std::string, double> NamedParameters(const IdimSystem& system, const Ei
 std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<ProcessedFlight>& flights,
                                                             const std::map<std::string, double>& parameters,
                                                             const Effects& effects) {
-  std::vector<double> residual_sq(6, 0.0), rotor_sq(6, 0.0);
-  for (const ProcessedFlight& f : flights) {
-    const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(f, effects);
-    const Eigen::VectorXd chi_t = FlightChiT(f.vehicle, parameters);
-    for (Eigen::Index i = 0; i < w.rows(); ++i) {
-      const double rho = w.row(i).dot(chi_t), rotor = w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1];
-      residual_sq[i % 6] += rho * rho;
-      rotor_sq[i % 6] += rotor * rotor;
-    }
-  }
-  std::vector<std::optional<double>> out(6);
-  for (int j = 0; j < 6; ++j)
-    if (rotor_sq[j] > 0.0) out[j] = 100.0 * std::sqrt(residual_sq[j] / rotor_sq[j]);
-  return out;
+  RelativeErrorSums sums;
+  for (const ProcessedFlight& f : flights)
+    sums.Add(BuildIdimMatrixWithEffects(f, effects), FlightChiT(f.vehicle, parameters));
+  return sums.Pct();
 }
 
 namespace {
@@ -69,15 +60,11 @@ namespace {
 Eigen::MatrixXd SystemRowsWithEffects(const IdentificationResult& linear, const Effects& effects) {
   const IdimSystem& system = linear.system;
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(system.w.rows(), system.w.cols());
-  const int p = system.num_parameters();
-  int row = 0;
+  Eigen::Index row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
     const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear.flights[f], effects);
-    const int c0 = IdimSystem::ConfigColumn(system.flight_config[f]);
-    w.block(row, 0, wf.rows(), 2) = wf.leftCols(2);
-    w.block(row, c0, wf.rows(), kNumBodyParameters) = wf.middleCols(2, kNumBodyParameters);
-    w.block(row, p, wf.rows(), 1) = wf.rightCols(1);
-    row += static_cast<int>(wf.rows());
+    system.PlaceFlightRows(system.flight_config[f], wf, row, &w);
+    row += wf.rows();
   }
   return w;
 }
@@ -112,34 +99,17 @@ std::string TerminationName(ceres::TerminationType type) {
   return "unknown";
 }
 
-// Variance inflation of a mean over autocorrelated residuals: 1 + 2 sum_l (1 - l/(L+1)) rho_l,
-// averaged over the wrench components (Bartlett window, lag as in the TLS statistics).
-double AutocorrelationFactor(const Eigen::VectorXd& residuals) {
+// Variance inflation of the refinement's noise scale by autocorrelated residuals, averaged over the
+// wrench components (their rows interleaved six by six), the first lag searched up to 200 samples
+// as in the TLS statistics.
+double ComponentAutocorrelationFactor(const Eigen::VectorXd& residuals) {
   double factor_sum = 0.0;
   int components = 0;
   for (int c = 0; c < 6; ++c) {
-    std::vector<double> x;
-    for (Eigen::Index i = c; i < residuals.size(); i += 6) x.push_back(residuals[i]);
-    const int n = static_cast<int>(x.size());
-    double c0 = 0.0;
-    for (double v : x) c0 += v * v;
-    if (n < 20 || c0 <= 0.0) continue;
-    int cut = 1;
-    std::vector<double> rho(1, 1.0);
-    for (; cut < std::min(n / 10, 200); ++cut) {
-      double ck = 0.0;
-      for (int t = 0; t + cut < n; ++t) ck += x[t] * x[t + cut];
-      rho.push_back(ck / c0);
-      if (ck / c0 < 0.1) break;
-    }
-    const int lag = std::min(2 * cut, n / 10);
-    double factor = 1.0;
-    for (int l = 1; l <= lag; ++l) {
-      double ck = 0.0;
-      for (int t = 0; t + l < n; ++t) ck += x[t] * x[t + l];
-      factor += 2.0 * (1.0 - static_cast<double>(l) / (lag + 1)) * ck / c0;
-    }
-    factor_sum += std::max(factor, 1.0);
+    const Eigen::Index n = residuals.size() > c ? (residuals.size() - c + 5) / 6 : 0;
+    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd, 0, Eigen::InnerStride<6>>(residuals.data() + c, n);
+    if (n < 20 || !(x.squaredNorm() > 0.0)) continue;
+    factor_sum += AutocorrelationFactor({x}, 200);
     ++components;
   }
   return components > 0 ? factor_sum / components : 1.0;
@@ -273,87 +243,102 @@ std::pair<double, double> RefineBounds(EffectKind kind, const RefineOptions& opt
   return {kind->info().lower_bound, kind->info().upper_bound};
 }
 
-// One Ceres pass: the rows of `linear`'s flights with effects, the criterion (lambda, N) of `tls`,
-// started at tls.chi and `start`. Fills chi, effects, their covariance and the solver report.
-RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
-                          const RefineOptions& options) {
-  const IdimSystem& system = linear.system;
-  const int p = system.num_parameters();
-  RefineResult result;
-  result.enabled = options.effects;
-
+// The Ceres problem of one pass and the storage its parameter blocks and residual blocks point
+// into: built in place and never moved. The problem is declared last, so it goes first.
+struct EffectProblem {
   CriterionContext context;
-  context.metric = tls.column_metric;
-  context.total_rows = static_cast<double>(system.w.rows());
-  context.num_parameters = p;
-  context.chi_scale.resize(p);
-  for (int k = 0; k < p; ++k) context.chi_scale[k] = std::max({std::abs(tls.chi[k]), tls.std[k], 1e-12});
-  Eigen::VectorXd scaled_chi = tls.chi.cwiseQuotient(context.chi_scale);
-  // One parameter block per enabled effect, in registry order; the others stay at their start.
-  const Vehicle& vehicle = linear.flights.front().vehicle;
   internal::EffectBlocks effect_blocks;
-  effect_blocks.fixed = start;
+  Eigen::VectorXd scaled_chi;                  // chi in units of context.chi_scale
+  std::vector<Eigen::VectorXd> effect_values;  // per free effect, in units of its RefineScale
+  std::vector<double*> blocks_of_residual;     // scaled_chi, then each free effect's block
+  std::vector<int> fixed, free;                // chi coordinates held at 0 / estimated
+  std::vector<std::unique_ptr<RotorSignalCache>> caches;
+  std::vector<internal::RotorMomentAnchor> anchors;
+  std::unique_ptr<ceres::Problem> problem;
+};
+
+// The parameter blocks: chi scaled by max(|chi|, std), one block per enabled effect in registry
+// order started at `start` (the other effects stay fixed at their start).
+void SetUpParameterBlocks(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
+                          const RefineOptions& options, EffectProblem* ep) {
+  const int p = linear.system.num_parameters();
+  ep->context.metric = tls.column_metric;
+  ep->context.total_rows = static_cast<double>(linear.system.w.rows());
+  ep->context.num_parameters = p;
+  ep->context.chi_scale.resize(p);
+  for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(tls.chi[k]), tls.std[k], 1e-12});
+  ep->scaled_chi = tls.chi.cwiseQuotient(ep->context.chi_scale);
+  const Vehicle& vehicle = linear.flights.front().vehicle;
+  ep->effect_blocks.fixed = start;
   for (EffectKind kind : AllEffects())
-    if (options.Enabled(kind)) effect_blocks.free.push_back(kind);
-  std::vector<Eigen::VectorXd> effect_values;
-  for (EffectKind kind : effect_blocks.free) {
-    effect_blocks.scale.push_back(RefineScale(kind));
+    if (options.Enabled(kind)) ep->effect_blocks.free.push_back(kind);
+  for (EffectKind kind : ep->effect_blocks.free) {
+    ep->effect_blocks.scale.push_back(RefineScale(kind));
     Eigen::VectorXd v = start.Get(kind);
     if (v.size() == 0) v = Eigen::VectorXd::Zero(kind->Dimension(vehicle));
     if (v.size() != kind->Dimension(vehicle))
       throw Error(kind->parameter_name() + " takes " + std::to_string(kind->Dimension(vehicle)) +
                   " value(s) for this vehicle, got " + std::to_string(v.size()));
-    effect_values.push_back(v / effect_blocks.scale.back());
+    ep->effect_values.push_back(v / ep->effect_blocks.scale.back());
   }
+  ep->blocks_of_residual = {ep->scaled_chi.data()};
+  for (Eigen::VectorXd& v : ep->effect_values) ep->blocks_of_residual.push_back(v.data());
+  for (int k = 0; k < p; ++k) (tls.essential[k] ? ep->free : ep->fixed).push_back(k);
+}
 
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  std::vector<std::unique_ptr<RotorSignalCache>> caches;
-  std::vector<internal::RotorMomentAnchor> anchors;
-  anchors.reserve(static_cast<size_t>(system.num_flights()));
+// The rows of every flight, in blocks of kRowSamplesPerBlock row samples, weighted as the TLS
+// weighted them; with the anchored criterion each flight's moment rows are anchored at tls.chi.
+void AddRowResiduals(const IdentificationResult& linear, const TlsSolution& tls, const RefineOptions& options,
+                     EffectProblem* ep) {
+  const IdimSystem& system = linear.system;
+  const bool anchored = options.criterion == "anchored";
+  ep->anchors.reserve(static_cast<size_t>(system.num_flights()));  // the caches point into it
   const Eigen::VectorXd sqrt_weight = tls.row_weight.cwiseSqrt();
-  std::vector<double*> blocks_of_residual = {scaled_chi.data()};
-  for (Eigen::VectorXd& v : effect_values) blocks_of_residual.push_back(v.data());
   int row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
     const ProcessedFlight& flight = linear.flights[f];
-    const bool anchored = options.criterion == "anchored";
-    if (anchored) anchors.push_back(internal::AnchorRotorMoments(flight, system, f, row, tls.chi));
-    caches.push_back(std::make_unique<RotorSignalCache>(&flight, &effect_blocks, anchored ? &anchors.back() : nullptr));
+    if (anchored) ep->anchors.push_back(internal::AnchorRotorMoments(flight, system, f, row, tls.chi));
+    ep->caches.push_back(
+        std::make_unique<RotorSignalCache>(&flight, &ep->effect_blocks, anchored ? &ep->anchors.back() : nullptr));
     for (int first = 0; first < flight.num_rows_samples(); first += kRowSamplesPerBlock) {
       const int count = std::min(kRowSamplesPerBlock, flight.num_rows_samples() - first);
       ceres::LossFunction* loss = nullptr;
       if (options.robust_loss == "huber") loss = new ceres::HuberLoss(options.robust_scale);
       if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
-      problem.AddResidualBlock(
-          new IdimResidualBlock(&flight, caches.back().get(), &context, &effect_blocks, system.flight_config[f], first,
-                                count, sqrt_weight.segment(row + 6 * first, 6 * count)),
-          loss, blocks_of_residual);
+      ep->problem->AddResidualBlock(
+          new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context, &ep->effect_blocks,
+                                system.flight_config[f], first, count, sqrt_weight.segment(row + 6 * first, 6 * count)),
+          loss, ep->blocks_of_residual);
     }
     row += 6 * flight.num_rows_samples();
   }
-  // Discarded (non-essential) parameters stay at zero, as in the TLS step.
-  std::vector<int> fixed, free;
-  for (int k = 0; k < p; ++k) (tls.essential[k] ? free : fixed).push_back(k);
-  if (free.empty()) {
-    problem.SetParameterBlockConstant(scaled_chi.data());
-  } else if (!fixed.empty()) {
-    problem.SetManifold(scaled_chi.data(), new ceres::SubsetManifold(p, fixed));
-  }
-  for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
-    const auto [lower, upper] = RefineBounds(effect_blocks.free[b], options);
-    for (Eigen::Index a = 0; a < effect_values[b].size(); ++a) {
-      problem.SetParameterLowerBound(effect_values[b].data(), static_cast<int>(a), lower / effect_blocks.Scale(b));
-      problem.SetParameterUpperBound(effect_values[b].data(), static_cast<int>(a), upper / effect_blocks.Scale(b));
-    }
-    if (effect_blocks.free[b]->info().zero_sum)
-      problem.AddResidualBlock(
-          new ZeroSumResidual(static_cast<int>(effect_values[b].size()), 100.0 * std::sqrt(context.total_rows)), nullptr,
-          effect_values[b].data());
-  }
+}
 
+// Discarded (non-essential) parameters stay at zero, as in the TLS step; effects within their
+// bounds; a zero-sum effect's sum pinned.
+void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
+  const int p = ep->context.num_parameters;
+  if (ep->free.empty()) {
+    ep->problem->SetParameterBlockConstant(ep->scaled_chi.data());
+  } else if (!ep->fixed.empty()) {
+    ep->problem->SetManifold(ep->scaled_chi.data(), new ceres::SubsetManifold(p, ep->fixed));
+  }
+  for (size_t b = 0; b < ep->effect_blocks.free.size(); ++b) {
+    const auto [lower, upper] = RefineBounds(ep->effect_blocks.free[b], options);
+    double* values = ep->effect_values[b].data();
+    for (Eigen::Index a = 0; a < ep->effect_values[b].size(); ++a) {
+      ep->problem->SetParameterLowerBound(values, static_cast<int>(a), lower / ep->effect_blocks.Scale(b));
+      ep->problem->SetParameterUpperBound(values, static_cast<int>(a), upper / ep->effect_blocks.Scale(b));
+    }
+    if (ep->effect_blocks.free[b]->info().zero_sum)
+      ep->problem->AddResidualBlock(new ZeroSumResidual(static_cast<int>(ep->effect_values[b].size()),
+                                                        100.0 * std::sqrt(ep->context.total_rows)),
+                                    nullptr, values);
+  }
+}
+
+// Solves the problem and records the solver's report; throws when the solution is unusable.
+void SolveEffectProblem(const RefineOptions& options, ceres::Problem* problem, RefineResult* result) {
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_QR;
   solver_options.max_num_iterations = options.max_iterations;
@@ -364,19 +349,119 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   solver_options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   const auto t0 = std::chrono::steady_clock::now();
-  ceres::Solve(solver_options, &problem, &summary);
-  result.solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  result.solver.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  result.solver.initial_cost = summary.initial_cost;
-  result.solver.final_cost = summary.final_cost;
-  result.solver.termination = TerminationName(summary.termination_type);
-  result.solver.message = summary.message;
-  result.solver.full_report = summary.FullReport();
+  ceres::Solve(solver_options, problem, &summary);
+  result->solver.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result->solver.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result->solver.initial_cost = summary.initial_cost;
+  result->solver.final_cost = summary.final_cost;
+  result->solver.termination = TerminationName(summary.termination_type);
+  result->solver.message = summary.message;
+  result->solver.full_report = summary.FullReport();
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);
+}
 
-  const Eigen::VectorXd chi = scaled_chi.cwiseProduct(context.chi_scale);
-  result.effects = effect_blocks.At(blocks_of_residual.data(), vehicle);
+// Labels of the free effects' coordinates, in block order.
+std::vector<std::string> FreeEffectLabels(const EffectProblem& ep) {
+  std::vector<std::string> labels;
+  for (size_t b = 0; b < ep.effect_blocks.free.size(); ++b) {
+    const std::vector<std::string> block =
+        ep.effect_blocks.free[b]->Labels(static_cast<int>(ep.effect_values[b].size()));
+    labels.insert(labels.end(), block.begin(), block.end());
+  }
+  return labels;
+}
 
+// Warns of effect coordinates whose value rests on a parameter the essential selection holds at 0.
+void NoteEffectsRestingOnDiscarded(EffectProblem* ep, const IdimSystem& system,
+                                   const std::vector<std::string>& effect_labels, RefineResult* result) {
+  std::vector<double*> effect_block_pointers;
+  for (Eigen::VectorXd& v : ep->effect_values) effect_block_pointers.push_back(v.data());
+  for (const RestingOnDiscarded& r : EffectsRestingOnDiscarded(ep->problem.get(), ep->scaled_chi.data(),
+                                                               effect_block_pointers, system, ep->fixed, effect_labels)) {
+    result->resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
+    char share[32];
+    std::snprintf(share, sizeof share, "%.1f %%", 100.0 * r.explained);
+    result->warnings.push_back(r.coordinate + " is confounded with " + r.parameter +
+                               ", which the essential selection holds at 0 (it explains " + share +
+                               " of its effect on the rows): its value assumes " + r.parameter + " = 0");
+  }
+}
+
+// The covariance of chi and the effects at the solution, scaled by the observed residual variance
+// (`cost` over the degrees of freedom) and the autocorrelation factor; where the Jacobian is rank
+// deficient, the confounded coordinates instead.
+void ComputeRefinedCovariance(EffectProblem* ep, const IdimSystem& system, double cost, Eigen::Index num_residuals,
+                              const std::vector<std::string>& effect_labels, RefineResult* result) {
+  std::vector<const double*> blocks;
+  if (!ep->free.empty()) blocks.push_back(ep->scaled_chi.data());
+  for (const Eigen::VectorXd& v : ep->effect_values) blocks.push_back(v.data());
+  if (blocks.empty()) return;
+  std::vector<std::pair<const double*, const double*>> pairs;
+  for (size_t a = 0; a < blocks.size(); ++a)
+    for (size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  covariance_options.null_space_rank = 0;
+  ceres::Covariance covariance(covariance_options);
+  if (!covariance.Compute(pairs, ep->problem.get())) {
+    result->rank_deficient = true;
+    result->confounded = NullSpaceParameters(ep->problem.get(), blocks, system, ep->free, effect_labels);
+    std::string names;
+    for (const std::string& n : result->confounded) names += (names.empty() ? "" : ", ") + n;
+    result->warnings.push_back(
+        "the refined parameters are not jointly identifiable from these flights (rank-deficient "
+        "Jacobian); confounded: " +
+        names + ". Their std is not reported.");
+    return;
+  }
+  // Whitened residuals have unit variance only if the noise model is right: scale by the
+  // observed residual variance and by the autocorrelation factor.
+  const double dof = std::max(1.0, static_cast<double>(num_residuals) - ep->problem->NumParameters());
+  const double scale = std::max(2.0 * cost / dof, 1e-300) * result->autocorrelation_factor;
+  int dim = 0;
+  for (const double* b : blocks) dim += ep->problem->ParameterBlockTangentSize(b);
+  Eigen::MatrixXd full(dim, dim);
+  covariance.GetCovarianceMatrixInTangentSpace(blocks, full.data());
+  full *= scale;
+  result->has_covariance = true;
+  const std::vector<int>& free = ep->free;
+  const Eigen::VectorXd& chi_scale = ep->context.chi_scale;
+  const int offset = static_cast<int>(free.size());
+  for (int a = 0; a < offset; ++a)
+    for (int b = 0; b < offset; ++b)
+      result->refined.covariance(free[a], free[b]) = full(a, b) * chi_scale[free[a]] * chi_scale[free[b]];
+  const int effect_dim = dim - offset;
+  const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
+  int e = 0;
+  for (size_t b = 0; b < ep->effect_blocks.free.size(); ++b) {
+    const Eigen::Index size = ep->effect_values[b].size();
+    result->effects_std.Set(ep->effect_blocks.free[b],
+                            ep->effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
+    e += static_cast<int>(size);
+  }
+  result->effect_labels = effect_labels;
+  const Eigen::VectorXd sd = effect_cov.diagonal().cwiseMax(1e-300).cwiseSqrt();
+  result->effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
+}
+
+// One Ceres pass: the rows of `linear`'s flights with effects, the criterion (lambda, N) of `tls`,
+// started at tls.chi and `start`. Fills chi, effects, their covariance and the solver report.
+RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
+                          const RefineOptions& options) {
+  RefineResult result;
+  result.enabled = options.effects;
+  EffectProblem ep;
+  SetUpParameterBlocks(linear, tls, start, options, &ep);
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ep.problem = std::make_unique<ceres::Problem>(problem_options);
+  AddRowResiduals(linear, tls, options, &ep);
+  ConstrainParameters(options, &ep);
+  SolveEffectProblem(options, ep.problem.get(), &result);
+
+  const Eigen::VectorXd chi = ep.scaled_chi.cwiseProduct(ep.context.chi_scale);
+  result.effects = ep.effect_blocks.At(ep.blocks_of_residual.data(), linear.flights.front().vehicle);
   result.refined = tls;
   result.refined.chi = chi;
   result.refined.covariance.setZero();
@@ -386,80 +471,17 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   // Residuals at the solution, for the noise scale and the autocorrelation factor.
   std::vector<double> residual_values;
   double cost = 0.0;
-  problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residual_values, nullptr, nullptr);
+  ep.problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residual_values, nullptr, nullptr);
   const Eigen::VectorXd residuals = Eigen::Map<const Eigen::VectorXd>(residual_values.data(), residual_values.size());
-  result.autocorrelation_factor = AutocorrelationFactor(residuals);
-  std::vector<std::string> effect_labels;
-  std::vector<double*> effect_block_pointers;
-  for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
-    const std::vector<std::string> labels = effect_blocks.free[b]->Labels(static_cast<int>(effect_values[b].size()));
-    effect_labels.insert(effect_labels.end(), labels.begin(), labels.end());
-    effect_block_pointers.push_back(effect_values[b].data());
-  }
+  result.autocorrelation_factor = ComponentAutocorrelationFactor(residuals);
+  const std::vector<std::string> effect_labels = FreeEffectLabels(ep);
   // A report for people: fits that skip the covariance (diagnosis folds, ablation) skip it too.
-  if (!free.empty() && options.compute_covariance)
-    for (const RestingOnDiscarded& r :
-         EffectsRestingOnDiscarded(&problem, scaled_chi.data(), effect_block_pointers, system, fixed, effect_labels)) {
-      result.resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
-      char share[32];
-      std::snprintf(share, sizeof share, "%.1f %%", 100.0 * r.explained);
-      result.warnings.push_back(r.coordinate + " is confounded with " + r.parameter +
-                                ", which the essential selection holds at 0 (it explains " + share +
-                                " of its effect on the rows): its value assumes " + r.parameter + " = 0");
-    }
-
   if (options.compute_covariance) {
-    std::vector<const double*> blocks;
-    if (!free.empty()) blocks.push_back(scaled_chi.data());
-    for (const Eigen::VectorXd& v : effect_values) blocks.push_back(v.data());
-    std::vector<std::pair<const double*, const double*>> pairs;
-    for (size_t a = 0; a < blocks.size(); ++a)
-      for (size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
-    ceres::Covariance::Options covariance_options;
-    covariance_options.algorithm_type = ceres::DENSE_SVD;
-    covariance_options.null_space_rank = 0;
-    ceres::Covariance covariance(covariance_options);
-    // Whitened residuals have unit variance only if the noise model is right: scale by the
-    // observed residual variance and by the autocorrelation factor.
-    const double dof = std::max(1.0, static_cast<double>(residuals.size()) - problem.NumParameters());
-    const double scale = std::max(2.0 * cost / dof, 1e-300) * result.autocorrelation_factor;
-    if (!blocks.empty() && covariance.Compute(pairs, &problem)) {
-      int dim = 0;
-      for (const double* b : blocks) dim += problem.ParameterBlockTangentSize(b);
-      Eigen::MatrixXd full(dim, dim);
-      covariance.GetCovarianceMatrixInTangentSpace(blocks, full.data());
-      full *= scale;
-      result.has_covariance = true;
-      const int offset = static_cast<int>(free.size());
-      for (int a = 0; a < offset; ++a)
-        for (int b = 0; b < offset; ++b)
-          result.refined.covariance(free[a], free[b]) =
-              full(a, b) * context.chi_scale[free[a]] * context.chi_scale[free[b]];
-      const int effect_dim = dim - offset;
-      const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
-      int e = 0;
-      for (size_t b = 0; b < effect_blocks.free.size(); ++b) {
-        const Eigen::Index size = effect_values[b].size();
-        result.effects_std.Set(effect_blocks.free[b], effect_blocks.Scale(b) *
-                                                          effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
-        e += static_cast<int>(size);
-      }
-      result.effect_labels = effect_labels;
-      const Eigen::VectorXd sd = effect_cov.diagonal().cwiseMax(1e-300).cwiseSqrt();
-      result.effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
-    } else if (!blocks.empty()) {
-      result.rank_deficient = true;
-      result.confounded = NullSpaceParameters(&problem, blocks, linear.system, free, effect_labels);
-      std::string names;
-      for (const std::string& n : result.confounded) names += (names.empty() ? "" : ", ") + n;
-      result.warnings.push_back(
-          "the refined parameters are not jointly identifiable from these flights (rank-deficient "
-          "Jacobian); confounded: " +
-          names + ". Their std is not reported.");
-    }
+    if (!ep.free.empty()) NoteEffectsRestingOnDiscarded(&ep, linear.system, effect_labels, &result);
+    ComputeRefinedCovariance(&ep, linear.system, cost, residuals.size(), effect_labels, &result);
   }
   result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  for (int k = 0; k < p; ++k)
+  for (int k = 0; k < chi.size(); ++k)
     if (chi[k] != 0.0) result.refined.rel_std_pct[k] = 100.0 * result.refined.std[k] / std::abs(chi[k]);
   return result;
 }

@@ -241,6 +241,43 @@ void AddDelayedAccelerometer(const std::vector<double>& times, const std::vector
   }
 }
 
+// Sampling instants: the unlogged warm-up, then the log; jitter clipped so time keeps increasing.
+std::vector<double> SampleTimes(const SimulationOptions& options, int num_warmup, int num_logged) {
+  std::vector<double> times(static_cast<size_t>(num_warmup + num_logged));
+  RandomStream jitter_random(options.seed, kJitterStream);
+  const double max_jitter_s = 0.4 / options.log_rate_hz;
+  for (size_t k = 0; k < times.size(); ++k) {
+    const double jitter = options.jitter_s > 0.0
+                              ? std::clamp(jitter_random.Normal(0.0, options.jitter_s), -max_jitter_s, max_jitter_s)
+                              : 0.0;
+    times[k] = (static_cast<int>(k) - num_warmup) / options.log_rate_hz + jitter;
+  }
+  return times;
+}
+
+// The state at times[k + 1] from the state at times[k]: RK4 steps of at most 1 / physics_rate, cut
+// where the motors' input has a kink (a logged sample arriving, t_j + delay), so that the
+// piecewise-linear input is smooth within each step.
+SimState IntegrateToNextSample(const MultirotorDynamics& dynamics, const MultirotorDynamics::RotorCommand& command,
+                               const std::vector<double>& times, int k, double command_latency_s,
+                               double physics_rate_hz, SimState state) {
+  std::vector<double> segment_ends;
+  for (auto it = std::upper_bound(times.begin(), times.begin() + k + 2, times[k] - command_latency_s);
+       it != times.begin() + k + 2 && *it + command_latency_s < times[k + 1]; ++it)
+    segment_ends.push_back(*it + command_latency_s);
+  segment_ends.push_back(times[k + 1]);
+  double segment_start = times[k];
+  for (const double segment_end : segment_ends) {
+    const double length = segment_end - segment_start;
+    if (length <= 0.0) continue;
+    const int num_steps = std::max(1, static_cast<int>(std::ceil(length * physics_rate_hz - 1e-9)));
+    const double h = length / num_steps;
+    for (int j = 0; j < num_steps; ++j) state = dynamics.Step(segment_start + j * h, state, h, command);
+    segment_start = segment_end;
+  }
+  return state;
+}
+
 }  // namespace
 
 SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
@@ -289,19 +326,10 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   pilot_options.hover_altitude_m = options.hover_altitude_m;
   const internal::Pilot pilot(pilot_options, &pilot_random);
 
-  // Sampling instants: the unlogged warm-up, then the log; jitter clipped so time keeps increasing.
   const int num_warmup = static_cast<int>(std::lround(options.warmup_s * options.log_rate_hz));
   const int num_logged = static_cast<int>(std::lround(options.duration_s * options.log_rate_hz));
   const int num_total = num_warmup + num_logged;
-  std::vector<double> times(num_total);
-  RandomStream jitter_random(options.seed, kJitterStream);
-  const double max_jitter_s = 0.4 / options.log_rate_hz;
-  for (int k = 0; k < num_total; ++k) {
-    const double jitter = options.jitter_s > 0.0
-                              ? std::clamp(jitter_random.Normal(0.0, options.jitter_s), -max_jitter_s, max_jitter_s)
-                              : 0.0;
-    times[k] = (k - num_warmup) / options.log_rate_hz + jitter;
-  }
+  const std::vector<double> times = SampleTimes(options, num_warmup, num_logged);
 
   // Start trimmed in hover at rest: rotors at the exact hover speeds, controller integrators preset.
   const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
@@ -377,22 +405,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     const internal::ControllerInput input{state.position_w_m, state.velocity_w_mps, state.attitude_wb, gyro};
     rotor_signal.Append(times[k + 1], controller.Update(t, dt_control, input, pilot.At(t + loop_latency_s)));
 
-    // RK4 steps of at most 1 / physics_rate, cut where the motors' input has a kink (a logged
-    // sample arriving, t_j + delay), so that the piecewise-linear input is smooth within each step.
-    std::vector<double> segment_ends;
-    for (auto it = std::upper_bound(times.begin(), times.begin() + k + 2, t - command_latency_s);
-         it != times.begin() + k + 2 && *it + command_latency_s < times[k + 1]; ++it)
-      segment_ends.push_back(*it + command_latency_s);
-    segment_ends.push_back(times[k + 1]);
-    double segment_start = t;
-    for (const double segment_end : segment_ends) {
-      const double length = segment_end - segment_start;
-      if (length <= 0.0) continue;
-      const int num_steps = std::max(1, static_cast<int>(std::ceil(length * options.physics_rate_hz - 1e-9)));
-      const double h = length / num_steps;
-      for (int j = 0; j < num_steps; ++j) state = dynamics.Step(segment_start + j * h, state, h, command);
-      segment_start = segment_end;
-    }
+    state = IntegrateToNextSample(dynamics, command, times, k, command_latency_s, options.physics_rate_hz, state);
   }
   AddDelayedAccelerometer(times, clean_accelerometer, num_warmup, accelerometer_delay_s, &log.acc_mps2);
   result.summary = Summarise(states);

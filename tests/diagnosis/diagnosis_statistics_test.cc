@@ -1,10 +1,9 @@
-// The diagnosis' statistics (F distribution, autocorrelation factor) and its linearisation of the
+// The diagnosis' statistics (F distribution) and its linearisation of the
 // model in the effect parameters, against independent computations.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "diagnosis/linearization.h"
 #include "diagnosis/statistics.h"
@@ -27,26 +26,6 @@ TEST(DiagnosisStatisticsTest, FDistributionMatchesKnownValues) {
   EXPECT_DOUBLE_EQ(FSurvival(0.0, 3.0, 10.0), 1.0);
   // I_x(a, b) + I_{1-x}(b, a) = 1.
   EXPECT_NEAR(RegularizedIncompleteBeta(2.5, 7.0, 0.3) + RegularizedIncompleteBeta(7.0, 2.5, 0.7), 1.0, 1e-12);
-}
-
-TEST(DiagnosisStatisticsTest, AutocorrelationFactorOfWhiteAndAr1Noise) {
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> normal;
-  const int n = 200000;
-  Eigen::VectorXd white(n), ar(n);
-  const double rho = 0.8;
-  double state = 0.0;
-  for (int i = 0; i < n; ++i) {
-    white[i] = normal(rng);
-    state = rho * state + normal(rng);
-    ar[i] = state;
-  }
-  EXPECT_NEAR(AutocorrelationFactor({white}), 1.0, 0.05);
-  // The variance of the mean of AR(1) is inflated by (1 + rho) / (1 - rho) = 9; the Bartlett window
-  // truncated where the autocorrelation has decayed recovers most of it.
-  const double factor = AutocorrelationFactor({ar.head(n / 2), ar.tail(n / 2)});
-  EXPECT_GT(factor, 7.0);
-  EXPECT_LT(factor, 9.5);
 }
 
 // The acc bias enters the rows linearly: one Gauss-Newton step of the linearised criterion from zero

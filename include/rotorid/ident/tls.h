@@ -48,6 +48,11 @@ struct IdimSystem {
   static int Flight(int group) { return group / 6; }
   // Column of the first body parameter of configuration c.
   static int ConfigColumn(int c) { return 2 + 9 * c; }
+  // Column of this system that column k of a flight's own rows (BuildIdimMatrix: kt, kd, the nine
+  // body parameters, the known column) goes to when the flight is of configuration c.
+  int SystemColumn(int c, int k) const;
+  // Writes a flight's own rows `wf` into w's columns for configuration c, from `first_row` on.
+  void PlaceFlightRows(int c, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const;
 };
 
 IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights);
@@ -114,5 +119,13 @@ double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution
 // Table III of the paper: per wrench component, ||rho_j|| / ||W_k chi_k (j)|| in %, over the
 // given rows (raw SI, unweighted); nullopt when the denominator is zero.
 std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t);
+
+// The sums behind RelativeErrorPct, for rows that come in pieces with their own chi_t (flights of
+// several configurations): Add each piece, then Pct.
+struct RelativeErrorSums {
+  std::vector<double> residual_sq = std::vector<double>(6, 0.0), rotor_sq = std::vector<double>(6, 0.0);
+  void Add(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t);
+  std::vector<std::optional<double>> Pct() const;
+};
 
 }  // namespace rotorid
