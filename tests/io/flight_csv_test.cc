@@ -66,8 +66,8 @@ TEST(FlightCsv, ReadsColumnsMetadataAndMotionCapture) {
 }
 
 TEST(FlightCsv, EulerAnglesAndDefaultGravity) {
-  const FlightLog log = ParseFlightCsv(kHeader + ",pos_x,pos_y,pos_z,roll,pitch,yaw\n" + Rows(20, ",1,2,3,0.1,0.2,0.3"),
-                                      "f.csv", 4);
+  const FlightLog log =
+      ParseFlightCsv(kHeader + ",pos_x,pos_y,pos_z,roll,pitch,yaw\n" + Rows(20, ",1,2,3,0.1,0.2,0.3"), "f.csv", 4);
   ASSERT_TRUE(log.mocap);
   EXPECT_DOUBLE_EQ(log.mocap->bryant_rad(19, 1), 0.2);
   EXPECT_FALSE(log.mocap->velocity_w_mps);
@@ -114,8 +114,8 @@ TEST(FlightCsv, ErrorsNameFileLineAndColumn) {
             "f.csv:1: pos_x..z given without roll,pitch,yaw or qw,qx,qy,qz");
   EXPECT_EQ(ErrorOf(kHeader + ",pos_x,pos_y,pos_z,roll,pitch\n" + Rows(20, ",1,2,3,0,0")),
             "f.csv:1: missing required column 'yaw'");
-  EXPECT_EQ(ErrorOf(kHeader + ",pos_x,pos_y,pos_z,qw,qx,qy,qz\n" + Rows(20, ",1,2,3,1,0,0,0", 2,
-                                                                      "0.02,0,0,0,0,0,9.8,900,900,900,900,1,2,3,0.3,0,0.3,0")),
+  EXPECT_EQ(ErrorOf(kHeader + ",pos_x,pos_y,pos_z,qw,qx,qy,qz\n" +
+                    Rows(20, ",1,2,3,1,0,0,0", 2, "0.02,0,0,0,0,0,9.8,900,900,900,900,1,2,3,0.3,0,0.3,0")),
             "f.csv: quaternion of data row 3 is not a rotation");
   EXPECT_EQ(ErrorOf(kHeader + ",vel_x,vel_y,vel_z\n" + Rows(20, ",1,2,3")),
             "f.csv:1:74: vel_x..z (world frame) need the pose (pos_x..z with roll,pitch,yaw or qw,qx,qy,qz) to be "
