@@ -1,6 +1,5 @@
 #include "rotorid/io/column_map.h"
 
-#include <fast_float/fast_float.h>
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
@@ -10,6 +9,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "io/csv_text.h"
 #include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/units.h"
@@ -169,121 +169,150 @@ MappedQuantity ParseQuantity(const std::string& source, const YAML::Node& key, c
   return q;
 }
 
-}  // namespace
+// The quantities a map may give.
+const QuantitySpec kTimeQuantity{"time", 1, &kTimeUnits, "{column: t, unit: s}"};
+const QuantitySpec kGyroQuantity{"gyro", 3, &kGyroUnits, "{columns: [gx, gy, gz], unit: rad/s}"};
+const QuantitySpec kAccQuantity{"acc", 3, &kAccUnits, "{columns: [ax, ay, az], unit: m/s^2}"};
+const QuantitySpec kRotorsQuantity{"rotors", -1, &kRotorUnits, "{columns: [m1, m2, m3, m4], unit: rpm}"};
+const QuantitySpec kCommandsQuantity{"rotor_commands", -1, &kCommandUnits, "{columns: [m1, m2, m3, m4], unit: pwm}"};
+const QuantitySpec kPositionQuantity{"position", 3, &kPositionUnits, "{columns: [px, py, pz], unit: m}"};
+const QuantitySpec kQuaternionQuantity{"quaternion", 4, nullptr, "{columns: [qw, qx, qy, qz]}"};
+const QuantitySpec kEulerQuantity{"euler", 3, &kAngleUnits, "{columns: [roll, pitch, yaw], unit: deg}"};
+const QuantitySpec kVoltageQuantity{"voltage", 1, &kVoltageUnits, "{column: vbat, unit: V}"};
 
-ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
-  const YAML::Node root = internal::LoadYaml(text, source);
-  if (!root.IsMap()) throw Error(source + ": a column map must be a YAML mapping with time, gyro, acc and rotors");
+// One top-level entry of the map.
+struct MapEntry {
+  YAML::Node key;
+  YAML::Node value;
+};
 
-  ColumnMap map;
-  map.source = source;
-  // Scalars first: gravity feeds the unit g of acc.
-  std::map<std::string, std::pair<YAML::Node, YAML::Node>> entries;  // key -> (key node, value node)
-  static const std::vector<std::string> kKeys = {
-      "time",    "gyro",  "acc",         "rotors",    "rotor_commands", "position",   "quaternion", "euler",
-      "voltage", "frame", "world_frame", "delimiter", "comment",        "skip_lines", "gravity",    "metadata"};
-  for (auto it = root.begin(); it != root.end(); ++it) {
-    const std::string key = it->first.IsScalar() ? it->first.Scalar() : "";
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      std::string known;
-      for (const auto& k : kKeys) known += (known.empty() ? "" : ", ") + k;
-      internal::FailAt(source, it->first, "unknown key '" + key + "' (known: " + known + ")");
+// The map's top-level entries by key: each key known, and given once.
+class MapEntries {
+ public:
+  MapEntries(const YAML::Node& root, const std::string& source) {
+    static const std::vector<std::string> kKeys = {
+        "time",    "gyro",  "acc",         "rotors",    "rotor_commands", "position",   "quaternion", "euler",
+        "voltage", "frame", "world_frame", "delimiter", "comment",        "skip_lines", "gravity",    "metadata"};
+    for (auto it = root.begin(); it != root.end(); ++it) {
+      const std::string key = it->first.IsScalar() ? it->first.Scalar() : "";
+      if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
+        std::string known;
+        for (const auto& k : kKeys) known += (known.empty() ? "" : ", ") + k;
+        internal::FailAt(source, it->first, "unknown key '" + key + "' (known: " + known + ")");
+      }
+      if (entries_.count(key)) internal::FailAt(source, it->first, "key '" + key + "' appears twice");
+      entries_.emplace(key, MapEntry{it->first, it->second});
     }
-    if (entries.count(key)) internal::FailAt(source, it->first, "key '" + key + "' appears twice");
-    entries.emplace(key, std::make_pair(it->first, it->second));
   }
-  auto find = [&](const std::string& key) -> const std::pair<YAML::Node, YAML::Node>* {
-    const auto it = entries.find(key);
-    return it == entries.end() ? nullptr : &it->second;
-  };
 
-  if (const auto* g = find("gravity")) {
-    map.gravity_mps2 = internal::ReadYamlNumber(source, g->second, "gravity");
-    if (!(map.gravity_mps2 > 0.0)) internal::FailAt(source, g->second, "gravity must be positive (m/s^2)");
+  // nullptr when the map leaves `key` out.
+  const MapEntry* Find(const std::string& key) const {
+    const auto it = entries_.find(key);
+    return it == entries_.end() ? nullptr : &it->second;
   }
-  if (const auto* f = find("frame")) {
-    const std::string frame = ReadString(source, f->second, "frame");
+  const YAML::Node* Value(const std::string& key) const {
+    const MapEntry* entry = Find(key);
+    return entry ? &entry->value : nullptr;
+  }
+
+ private:
+  std::map<std::string, MapEntry> entries_;
+};
+
+void ReadFrames(const MapEntries& entries, const std::string& source, ColumnMap* map) {
+  if (const YAML::Node* f = entries.Value("frame")) {
+    const std::string frame = ReadString(source, *f, "frame");
     if (frame == "flu") {
-      map.frame = BodyFrame::kFlu;
+      map->frame = BodyFrame::kFlu;
     } else if (frame == "frd") {
-      map.frame = BodyFrame::kFrd;
+      map->frame = BodyFrame::kFrd;
     } else {
-      internal::FailAt(source, f->second, "frame must be flu or frd, got '" + frame + "'");
+      internal::FailAt(source, *f, "frame must be flu or frd, got '" + frame + "'");
     }
   }
-  map.world_frame = map.frame == BodyFrame::kFrd ? WorldFrame::kNed : WorldFrame::kZUp;
-  if (const auto* f = find("world_frame")) {
-    const std::string frame = ReadString(source, f->second, "world_frame");
+  map->world_frame = map->frame == BodyFrame::kFrd ? WorldFrame::kNed : WorldFrame::kZUp;
+  if (const YAML::Node* f = entries.Value("world_frame")) {
+    const std::string frame = ReadString(source, *f, "world_frame");
     if (frame == "zup" || frame == "enu" || frame == "nwu") {
-      map.world_frame = WorldFrame::kZUp;
+      map->world_frame = WorldFrame::kZUp;
     } else if (frame == "ned") {
-      map.world_frame = WorldFrame::kNed;
+      map->world_frame = WorldFrame::kNed;
     } else {
-      internal::FailAt(source, f->second, "world_frame must be zup (also: enu, nwu) or ned, got '" + frame + "'");
+      internal::FailAt(source, *f, "world_frame must be zup (also: enu, nwu) or ned, got '" + frame + "'");
     }
   }
-  if (const auto* d = find("delimiter")) {
-    const std::string delimiter = ReadString(source, d->second, "delimiter");
+}
+
+// delimiter, comment and skip_lines.
+void ReadCsvLayout(const MapEntries& entries, const std::string& source, ColumnMap* map) {
+  if (const YAML::Node* d = entries.Value("delimiter")) {
+    const std::string delimiter = ReadString(source, *d, "delimiter");
     if (delimiter == "whitespace") {
-      map.whitespace_delimited = true;
+      map->whitespace_delimited = true;
     } else if (delimiter == "tab") {
-      map.delimiter = '\t';
+      map->delimiter = '\t';
     } else if (delimiter.size() == 1 && delimiter != "\"" && delimiter != "\n" && delimiter != "\r") {
-      map.delimiter = delimiter[0];
+      map->delimiter = delimiter[0];
     } else {
-      internal::FailAt(source, d->second,
-                       "delimiter must be one character (e.g. \",\", \";\", \"\\t\"), tab or whitespace");
+      internal::FailAt(source, *d, "delimiter must be one character (e.g. \",\", \";\", \"\\t\"), tab or whitespace");
     }
   }
-  if (const auto* c = find("comment")) {
-    map.comment = c->second.IsNull() ? "" : ReadString(source, c->second, "comment");
+  if (const YAML::Node* c = entries.Value("comment")) {
+    map->comment = c->IsNull() ? "" : ReadString(source, *c, "comment");
   }
-  if (const auto* s = find("skip_lines")) {
-    const double lines = internal::ReadYamlNumber(source, s->second, "skip_lines");
+  if (const YAML::Node* s = entries.Value("skip_lines")) {
+    const double lines = internal::ReadYamlNumber(source, *s, "skip_lines");
     if (lines < 0 || lines > 1e6 || lines != std::floor(lines)) {
-      internal::FailAt(source, s->second, "skip_lines must be a whole number >= 0");
+      internal::FailAt(source, *s, "skip_lines must be a whole number >= 0");
     }
-    map.skip_lines = static_cast<int>(lines);
+    map->skip_lines = static_cast<int>(lines);
   }
-  if (const auto* m = find("metadata")) {
-    if (!m->second.IsMap()) internal::FailAt(source, m->second, "metadata must be a mapping of key: value");
-    for (auto it = m->second.begin(); it != m->second.end(); ++it) {
-      map.metadata[ReadString(source, it->first, "metadata key")] = ReadString(source, it->second, "metadata value");
+}
+
+// Everything but the quantities; gravity first, since it feeds the unit g of acc.
+void ReadSettings(const MapEntries& entries, const std::string& source, ColumnMap* map) {
+  if (const YAML::Node* g = entries.Value("gravity")) {
+    map->gravity_mps2 = internal::ReadYamlNumber(source, *g, "gravity");
+    if (!(map->gravity_mps2 > 0.0)) internal::FailAt(source, *g, "gravity must be positive (m/s^2)");
+  }
+  ReadFrames(entries, source, map);
+  ReadCsvLayout(entries, source, map);
+  if (const YAML::Node* m = entries.Value("metadata")) {
+    if (!m->IsMap()) internal::FailAt(source, *m, "metadata must be a mapping of key: value");
+    for (auto it = m->begin(); it != m->end(); ++it) {
+      map->metadata[ReadString(source, it->first, "metadata key")] = ReadString(source, it->second, "metadata value");
     }
   }
+}
 
-  const QuantitySpec kTime{"time", 1, &kTimeUnits, "{column: t, unit: s}"};
-  const QuantitySpec kGyro{"gyro", 3, &kGyroUnits, "{columns: [gx, gy, gz], unit: rad/s}"};
-  const QuantitySpec kAcc{"acc", 3, &kAccUnits, "{columns: [ax, ay, az], unit: m/s^2}"};
-  const QuantitySpec kRotors{"rotors", -1, &kRotorUnits, "{columns: [m1, m2, m3, m4], unit: rpm}"};
-  const QuantitySpec kCommands{"rotor_commands", -1, &kCommandUnits, "{columns: [m1, m2, m3, m4], unit: pwm}"};
-  const QuantitySpec kPosition{"position", 3, &kPositionUnits, "{columns: [px, py, pz], unit: m}"};
-  const QuantitySpec kQuaternion{"quaternion", 4, nullptr, "{columns: [qw, qx, qy, qz]}"};
-  const QuantitySpec kEuler{"euler", 3, &kAngleUnits, "{columns: [roll, pitch, yaw], unit: deg}"};
-  const QuantitySpec kVoltage{"voltage", 1, &kVoltageUnits, "{column: vbat, unit: V}"};
-
-  auto required = [&](const QuantitySpec& spec) {
-    const auto* entry = find(spec.key);
-    if (!entry) throw Error(source + ": missing '" + spec.key + "', e.g. " + spec.key + ": " + spec.example);
-    return ParseQuantity(source, entry->first, entry->second, spec, map.gravity_mps2);
-  };
+void ReadQuantities(const MapEntries& entries, const std::string& source, ColumnMap* map) {
   auto optional = [&](const QuantitySpec& spec) -> std::optional<MappedQuantity> {
-    const auto* entry = find(spec.key);
+    const MapEntry* entry = entries.Find(spec.key);
     if (!entry) return std::nullopt;
-    return ParseQuantity(source, entry->first, entry->second, spec, map.gravity_mps2);
+    return ParseQuantity(source, entry->key, entry->value, spec, map->gravity_mps2);
   };
-  map.time = required(kTime);
-  map.gyro = required(kGyro);
-  map.acc = required(kAcc);
-  map.rotors = optional(kRotors);
-  map.rotor_commands = optional(kCommands);
-  map.position = optional(kPosition);
-  map.quaternion = optional(kQuaternion);
-  map.euler = optional(kEuler);
-  map.voltage = optional(kVoltage);
+  auto required = [&](const QuantitySpec& spec) {
+    std::optional<MappedQuantity> quantity = optional(spec);
+    if (!quantity) throw Error(source + ": missing '" + spec.key + "', e.g. " + spec.key + ": " + spec.example);
+    return std::move(*quantity);
+  };
+  map->time = required(kTimeQuantity);
+  map->gyro = required(kGyroQuantity);
+  map->acc = required(kAccQuantity);
+  map->rotors = optional(kRotorsQuantity);
+  map->rotor_commands = optional(kCommandsQuantity);
+  map->position = optional(kPositionQuantity);
+  map->quaternion = optional(kQuaternionQuantity);
+  map->euler = optional(kEulerQuantity);
+  map->voltage = optional(kVoltageQuantity);
+}
 
+// A rotor signal, at most one second signal (commands beside speeds), and motion capture with
+// both position and one orientation.
+void CheckQuantitiesFitTogether(const ColumnMap& map) {
+  const std::string& source = map.source;
   if (!map.rotors && !map.rotor_commands) {
-    throw Error(source + ": missing 'rotors', e.g. rotors: " + kRotors.example);
+    throw Error(source + ": missing 'rotors', e.g. rotors: " + kRotorsQuantity.example);
   }
   if (map.rotors && map.rotor_commands) {
     if (map.rotors->is_command) {
@@ -306,6 +335,19 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
     FailAt(source, (map.quaternion ? map.quaternion : map.euler)->location,
            "an orientation needs position too (motion capture takes both)");
   }
+}
+
+}  // namespace
+
+ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
+  const YAML::Node root = internal::LoadYaml(text, source);
+  if (!root.IsMap()) throw Error(source + ": a column map must be a YAML mapping with time, gyro, acc and rotors");
+  const MapEntries entries(root, source);
+  ColumnMap map;
+  map.source = source;
+  ReadSettings(entries, source, &map);
+  ReadQuantities(entries, source, &map);
+  CheckQuantitiesFitTogether(map);
   return map;
 }
 
@@ -315,11 +357,8 @@ ColumnMap ReadColumnMap(const std::string& path) { return ParseColumnMap(ReadFil
 
 namespace {
 
-std::string_view TrimSpaces(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
+using internal::TextLine;
+using internal::TrimSpaces;
 
 // Splits one line into cells (trimmed; a cell in double quotes loses its quotes) and records
 // where each starts (0-based), reusing the caller's buffers: no allocation per row once they
@@ -371,37 +410,11 @@ void SplitCells(std::string_view line, const ColumnMap& map, std::vector<std::st
   }
 }
 
-struct Line {
-  std::string_view text;
-  int number;  // 1-based
-};
-
-// The next line of `rest` (without '\n' and trailing '\r').
-bool NextLine(std::string_view* rest, int* number, Line* line) {
-  if (rest->empty()) return false;
-  const size_t newline = rest->find('\n');
-  std::string_view text = rest->substr(0, newline);
-  *rest = newline == std::string_view::npos ? std::string_view() : rest->substr(newline + 1);
-  if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
-  *line = {text, ++*number};
-  return true;
-}
-
 bool IsSkipped(std::string_view text, const ColumnMap& map) {
   const std::string_view trimmed = TrimSpaces(text);
   if (trimmed.empty()) return true;
   return !map.comment.empty() && trimmed.substr(0, map.comment.size()) == map.comment;
 }
-
-// One CSV column the map refers to, and the values read from it.
-struct NeededColumn {
-  std::string name;
-  int cell = -1;  // index in a row
-  const MappedQuantity* quantity = nullptr;
-  MapLocation map_location;
-  bool is_time = false;
-  std::vector<double> values;
-};
 
 // "map.yaml:3:22" for messages that point into the map from a CSV error.
 std::string Where(const std::string& file, MapLocation at) {
@@ -420,35 +433,29 @@ std::string HeaderPreview(const std::vector<std::string>& names) {
 
 // Time cells in integer units (us, ns) can exceed double's 53 bits; read them as integers and
 // split whole seconds from the fraction so that no precision is lost before scaling.
-bool ParseTime(std::string_view cell, const MappedQuantity& q, double* seconds) {
+std::optional<double> ParseTime(std::string_view cell, const MappedQuantity& q) {
   if (q.scale == 1.0 && q.unit_factor < 1.0) {
     int64_t ticks = 0;
     const auto r = std::from_chars(cell.data(), cell.data() + cell.size(), ticks);
     if (r.ec == std::errc() && r.ptr == cell.data() + cell.size()) {
       const auto per_second = static_cast<int64_t>(std::llround(1.0 / q.unit_factor));
-      *seconds = static_cast<double>(ticks / per_second) + static_cast<double>(ticks % per_second) * q.unit_factor;
-      return true;
+      return static_cast<double>(ticks / per_second) + static_cast<double>(ticks % per_second) * q.unit_factor;
     }
   }
-  double value = 0.0;
-  const auto r = fast_float::from_chars(cell.data(), cell.data() + cell.size(), value);
-  if (cell.empty() || r.ec != std::errc() || r.ptr != cell.data() + cell.size() || !std::isfinite(value)) return false;
-  *seconds = value * q.scale * q.unit_factor;
-  return true;
+  const std::optional<double> value = internal::ParseFiniteNumber(cell);
+  if (!value) return std::nullopt;
+  return *value * q.scale * q.unit_factor;
 }
 
 Eigen::Matrix3d FrameFlip(bool flip) {
   return flip ? Eigen::Vector3d(1, -1, -1).asDiagonal().toDenseMatrix() : Eigen::Matrix3d::Identity();
 }
 
-}  // namespace
-
-FlightLog ParseMappedCsv(std::string_view text, const std::string& source, const ColumnMap& map, int num_rotors,
-                         const std::string& rotor_signal) {
+// Which rotor signal: speed when available (unless commands are asked for), else the command.
+const MappedQuantity* ChooseRotorSignal(const ColumnMap& map, const std::string& rotor_signal, int num_rotors) {
   if (rotor_signal != "auto" && rotor_signal != "rpm" && rotor_signal != "command") {
     throw Error("rotor signal must be auto, rpm or command, got '" + rotor_signal + "'");
   }
-  // Which rotor signal: speed when available (unless commands are asked for), else the command.
   const MappedQuantity* speed = map.rotors && !map.rotors->is_command ? &*map.rotors : nullptr;
   const MappedQuantity* command =
       map.rotor_commands ? &*map.rotor_commands : (map.rotors && map.rotors->is_command ? &*map.rotors : nullptr);
@@ -475,60 +482,116 @@ FlightLog ParseMappedCsv(std::string_view text, const std::string& source, const
            "the map lists " + std::to_string(rotor->columns.size()) + " rotor columns, the vehicle has " +
                std::to_string(num_rotors) + " rotors");
   }
+  return rotor;
+}
 
-  // Header. A UTF-8 byte-order mark (spreadsheet exports) is not part of the first name.
-  std::string_view rest = text;
-  if (rest.substr(0, 3) == "\xEF\xBB\xBF") rest.remove_prefix(3);
-  int line_number = 0;
-  Line line;
+struct MappedHeader {
+  int line = 0;
+  std::vector<std::string> names;
+  std::vector<int> starts;  // where each name starts (0-based)
+  std::unordered_map<std::string, int> index_of;
+  std::vector<std::string> duplicated;
+};
+
+// The first line after skip_lines that is neither blank nor a comment. A UTF-8 byte-order mark
+// (spreadsheet exports) is not part of the first name.
+MappedHeader ReadMappedHeader(const ColumnMap& map, const std::string& source, std::string_view* rest,
+                              int* line_number) {
+  if (rest->substr(0, 3) == "\xEF\xBB\xBF") rest->remove_prefix(3);
+  TextLine line;
   for (int k = 0; k < map.skip_lines; ++k) {
-    if (!NextLine(&rest, &line_number, &line)) break;
+    if (!internal::NextLine(rest, line_number, &line)) break;
   }
   bool have_header = false;
-  while (NextLine(&rest, &line_number, &line)) {
+  while (internal::NextLine(rest, line_number, &line)) {
     if (!IsSkipped(line.text, map)) {
       have_header = true;
       break;
     }
   }
   if (!have_header) throw Error(source + ": no header line (the file is empty after skipped and comment lines)");
-  const int header_line = line.number;
+  MappedHeader header;
+  header.line = line.number;
   std::vector<std::string_view> cells;
-  std::vector<int> starts;
-  SplitCells(line.text, map, &cells, &starts);
-  std::vector<std::string> header(cells.begin(), cells.end());
-  std::unordered_map<std::string, int> index_of;
-  std::vector<std::string> duplicated;
-  for (size_t k = 0; k < header.size(); ++k) {
-    if (!index_of.emplace(header[k], static_cast<int>(k)).second) duplicated.push_back(header[k]);
+  SplitCells(line.text, map, &cells, &header.starts);
+  header.names.assign(cells.begin(), cells.end());
+  for (size_t k = 0; k < header.names.size(); ++k) {
+    if (!header.index_of.emplace(header.names[k], static_cast<int>(k)).second) {
+      header.duplicated.push_back(header.names[k]);
+    }
   }
+  return header;
+}
 
-  // The columns the map needs, each read once even when several quantities share it.
-  std::vector<NeededColumn> needed;
-  std::unordered_map<std::string, size_t> needed_of;
-  std::vector<std::vector<size_t>> slots_of_quantity;  // per quantity in `quantities`, per column
-  std::vector<const MappedQuantity*> quantities = {&map.time, &map.gyro, &map.acc, rotor};
+// One CSV column the map refers to, and the values read from it.
+struct NeededColumn {
+  std::string name;
+  int cell = -1;  // index in a row
+  const MappedQuantity* quantity = nullptr;
+  bool is_time = false;
+  std::vector<double> values;
+};
+
+// The columns read for the quantities, each column once even when several quantities share it.
+struct MappedColumns {
+  std::vector<const MappedQuantity*> quantities;       // time first
+  std::vector<NeededColumn> needed;                    // in the order first named
+  std::vector<std::vector<size_t>> slots_of_quantity;  // per quantity, per column: index in `needed`
+  std::vector<int> row_lines;                          // file line of each row read
+
+  int num_rows() const { return static_cast<int>(row_lines.size()); }
+  const std::vector<double>& Values(const MappedQuantity& q, size_t column) const {
+    const auto qi = static_cast<size_t>(std::find(quantities.begin(), quantities.end(), &q) - quantities.begin());
+    return needed[slots_of_quantity[qi][column]].values;
+  }
+  // One column in SI units (or the map's command units): raw * scale * unit factor.
+  Eigen::VectorXd Scaled(const MappedQuantity& q, size_t column) const {
+    const std::vector<double>& v = Values(q, column);
+    Eigen::VectorXd out(num_rows());
+    for (int i = 0; i < num_rows(); ++i) out[i] = v[i] * q.scale * q.unit_factor;
+    return out;
+  }
+  Eigen::MatrixX3d Vector3(const MappedQuantity& q) const {
+    Eigen::MatrixX3d out(num_rows(), 3);
+    for (int a = 0; a < 3; ++a) out.col(a) = Scaled(q, a);
+    return out;
+  }
+};
+
+// Time, gyro, acc, the rotor signal, then what else the map gives.
+std::vector<const MappedQuantity*> QuantitiesToRead(const ColumnMap& map, const MappedQuantity& rotor) {
+  std::vector<const MappedQuantity*> quantities = {&map.time, &map.gyro, &map.acc, &rotor};
   for (const auto* q : {&map.position, &map.quaternion, &map.euler, &map.voltage}) {
     if (*q) quantities.push_back(&**q);
   }
+  return quantities;
+}
+
+// Every column the quantities name must appear once in the header. Time is parsed unlike the
+// others, so it never shares a column with them.
+MappedColumns LocateColumns(const std::vector<const MappedQuantity*>& quantities, const MappedHeader& header,
+                            const ColumnMap& map, const std::string& source) {
+  MappedColumns columns;
+  columns.quantities = quantities;
+  std::unordered_map<std::string, size_t> needed_of;
   for (size_t qi = 0; qi < quantities.size(); ++qi) {
     const MappedQuantity& q = *quantities[qi];
     std::vector<size_t> slots;
     for (size_t c = 0; c < q.columns.size(); ++c) {
       const std::string& name = q.columns[c];
-      const auto found = index_of.find(name);
-      if (found == index_of.end()) {
-        throw Error(Located(source, header_line, 0,
+      const auto found = header.index_of.find(name);
+      if (found == header.index_of.end()) {
+        throw Error(Located(source, header.line, 0,
                             "no column '" + name + "' (named at " + Where(map.source, q.column_locations[c]) +
-                                "); the header has: " + HeaderPreview(header)));
+                                "); the header has: " + HeaderPreview(header.names)));
       }
-      if (std::find(duplicated.begin(), duplicated.end(), name) != duplicated.end()) {
-        throw Error(Located(source, header_line, starts[found->second] + 1,
+      if (std::find(header.duplicated.begin(), header.duplicated.end(), name) != header.duplicated.end()) {
+        throw Error(Located(source, header.line, header.starts[found->second] + 1,
                             "column '" + name + "' appears more than once in the header; the map cannot tell which"));
       }
       const bool is_time = qi == 0;
       const auto existing = needed_of.find(name);
-      if (existing != needed_of.end() && !(is_time || needed[existing->second].is_time)) {
+      if (existing != needed_of.end() && !(is_time || columns.needed[existing->second].is_time)) {
         slots.push_back(existing->second);
         continue;
       }
@@ -536,150 +599,156 @@ FlightLog ParseMappedCsv(std::string_view text, const std::string& source, const
       column.name = name;
       column.cell = found->second;
       column.quantity = &q;
-      column.map_location = q.column_locations[c];
       column.is_time = is_time;
-      needed_of.emplace(name, needed.size());
-      slots.push_back(needed.size());
-      needed.push_back(std::move(column));
+      needed_of.emplace(name, columns.needed.size());
+      slots.push_back(columns.needed.size());
+      columns.needed.push_back(std::move(column));
     }
-    slots_of_quantity.push_back(std::move(slots));
+    columns.slots_of_quantity.push_back(std::move(slots));
   }
+  return columns;
+}
 
-  // Rows: only the needed cells are parsed, so text columns elsewhere do no harm.
+// The rows after the header: only the needed cells are parsed, so text columns elsewhere do no
+// harm.
+void ReadMappedRows(std::string_view rest, int line_number, size_t num_cells, const ColumnMap& map,
+                    const std::string& source, MappedColumns* columns) {
   const size_t expected_rows = static_cast<size_t>(std::count(rest.begin(), rest.end(), '\n')) + 1;
-  for (NeededColumn& column : needed) column.values.reserve(expected_rows);
-  std::vector<int> row_lines;
-  row_lines.reserve(expected_rows);
-  while (NextLine(&rest, &line_number, &line)) {
+  for (NeededColumn& column : columns->needed) column.values.reserve(expected_rows);
+  columns->row_lines.reserve(expected_rows);
+  std::vector<std::string_view> cells;
+  std::vector<int> starts;
+  TextLine line;
+  while (internal::NextLine(&rest, &line_number, &line)) {
     if (IsSkipped(line.text, map)) continue;
     SplitCells(line.text, map, &cells, &starts);
-    if (cells.size() != header.size()) {
+    if (cells.size() != num_cells) {
       throw Error(Located(source, line.number, 0,
                           "row has " + std::to_string(cells.size()) + " cells, the header has " +
-                              std::to_string(header.size()) + " (truncated or malformed row)"));
+                              std::to_string(num_cells) + " (truncated or malformed row)"));
     }
-    for (NeededColumn& column : needed) {
+    for (NeededColumn& column : columns->needed) {
       const std::string_view cell = cells[column.cell];
-      double value = 0.0;
-      bool ok;
-      if (column.is_time) {
-        ok = ParseTime(cell, *column.quantity, &value);
-      } else {
-        const auto r = fast_float::from_chars(cell.data(), cell.data() + cell.size(), value);
-        ok = !cell.empty() && r.ec == std::errc() && r.ptr == cell.data() + cell.size() && std::isfinite(value);
-      }
-      if (!ok) {
+      const std::optional<double> value =
+          column.is_time ? ParseTime(cell, *column.quantity) : internal::ParseFiniteNumber(cell);
+      if (!value) {
         throw Error(Located(
             source, line.number, starts[column.cell] + 1,
             "column '" + column.name + "' holds '" + std::string(cell.substr(0, 40)) + "', not a finite number"));
       }
-      column.values.push_back(value);
+      column.values.push_back(*value);
     }
-    row_lines.push_back(line.number);
+    columns->row_lines.push_back(line.number);
   }
-  const int n = static_cast<int>(row_lines.size());
-  if (n < kMinFlightSamples) {
-    throw Error(source + ": too few samples (" + std::to_string(n) + "); at least " +
-                std::to_string(kMinFlightSamples) + " are needed");
+}
+
+Eigen::VectorXd ReadTime(const MappedColumns& columns, const ColumnMap& map, const std::string& source) {
+  const Eigen::VectorXd t_s = Eigen::Map<const Eigen::VectorXd>(columns.Values(map.time, 0).data(), columns.num_rows());
+  if (const std::optional<int> i = internal::FirstNonIncreasingTime(t_s)) {
+    throw Error(Located(source, columns.row_lines[*i], 0,
+                        "time goes backwards or repeats: column '" + map.time.columns[0] + "' " +
+                            std::to_string(t_s[*i]) + " s after " + std::to_string(t_s[*i - 1]) + " s"));
   }
+  return t_s;
+}
+
+// Commands normalised over their range; speeds in rad/s, which must not be negative.
+Eigen::MatrixXd ReadRotorSignal(const MappedColumns& columns, const MappedQuantity& rotor, const ColumnMap& map,
+                                const std::string& source) {
+  const int n = columns.num_rows();
+  const int num_columns = static_cast<int>(rotor.columns.size());
+  Eigen::MatrixXd signal(n, num_columns);
+  for (int r = 0; r < num_columns; ++r) {
+    const std::vector<double>& v = columns.Values(rotor, r);
+    for (int i = 0; i < n; ++i) {
+      double x = v[i] * rotor.scale;
+      if (rotor.is_command) {
+        // A command below the range's low end stops the motor: clamp at 0.
+        x = std::max(0.0, (x - rotor.range_low) / (rotor.range_high - rotor.range_low));
+      } else {
+        x *= rotor.unit_factor;
+        if (x < 0.0) {
+          throw Error(Located(source, columns.row_lines[i], 0,
+                              "column '" + rotor.columns[r] + "' holds a negative rotor speed; rotor columns are " +
+                                  "|Omega| (map: " + Where(map.source, rotor.column_locations[r]) + ")"));
+        }
+      }
+      signal(i, r) = x;
+    }
+  }
+  return signal;
+}
+
+void DescribeRotorSignal(const MappedQuantity& rotor, std::map<std::string, std::string>* metadata) {
+  (*metadata)["rotor_signal"] = rotor.is_command ? "command" : "speed";
+  (*metadata)["rotor_signal_unit"] = rotor.unit;
+  std::string names;
+  for (const auto& c : rotor.columns) names += (names.empty() ? "" : ",") + c;
+  (*metadata)["rotor_signal_columns"] = names;
+}
+
+// Position, and the attitude from the quaternion or the Euler angles, in rotorid's frames.
+MocapTrack MocapFromColumns(const MappedColumns& columns, const ColumnMap& map, const std::string& source) {
+  const int n = columns.num_rows();
+  const Eigen::Matrix3d body_flip = FrameFlip(map.frame == BodyFrame::kFrd);
+  const Eigen::Matrix3d world_flip = FrameFlip(map.world_frame == WorldFrame::kNed);
+  MocapTrack mocap;
+  mocap.position_w_m = columns.Vector3(*map.position) * world_flip;
+  mocap.bryant_rad.resize(n, 3);
+  if (map.quaternion) {
+    const MappedQuantity& quaternion = *map.quaternion;
+    const std::vector<double>& qw = columns.Values(quaternion, 0);
+    const std::vector<double>& qx = columns.Values(quaternion, 1);
+    const std::vector<double>& qy = columns.Values(quaternion, 2);
+    const std::vector<double>& qz = columns.Values(quaternion, 3);
+    for (int i = 0; i < n; ++i) {
+      Eigen::Quaterniond q(qw[i], qx[i], qy[i], qz[i]);
+      if (!(q.norm() > 0.5 && q.norm() < 2.0)) {
+        throw Error(Located(source, columns.row_lines[i], 0,
+                            "the quaternion in columns " + quaternion.columns[0] + ".." + quaternion.columns[3] +
+                                " has norm " + std::to_string(q.norm()) + ", not a rotation"));
+      }
+      const Eigen::Matrix3d r = world_flip * q.normalized().toRotationMatrix() * body_flip;
+      mocap.bryant_rad.row(i) = RotationToBryant(r).transpose();
+    }
+  } else {
+    const Eigen::MatrixX3d angles = columns.Vector3(*map.euler);
+    const bool flip = map.frame == BodyFrame::kFrd || map.world_frame == WorldFrame::kNed;
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d rpy = angles.row(i).transpose();
+      const Eigen::Vector3d converted = flip ? RotationToBryant(world_flip * BryantToRotation(rpy) * body_flip) : rpy;
+      mocap.bryant_rad.row(i) = converted.transpose();
+    }
+  }
+  return mocap;
+}
+
+}  // namespace
+
+FlightLog ParseMappedCsv(std::string_view text, const std::string& source, const ColumnMap& map, int num_rotors,
+                         const std::string& rotor_signal) {
+  const MappedQuantity* rotor = ChooseRotorSignal(map, rotor_signal, num_rotors);
+  std::string_view rest = text;
+  int line_number = 0;
+  const MappedHeader header = ReadMappedHeader(map, source, &rest, &line_number);
+  MappedColumns columns = LocateColumns(QuantitiesToRead(map, *rotor), header, map, source);
+  ReadMappedRows(rest, line_number, header.names.size(), map, source, &columns);
+  internal::RequireMinFlightSamples(source, columns.num_rows());
 
   FlightLog log;
   log.source = source;
   log.gravity_mps2 = map.gravity_mps2;
   log.metadata = map.metadata;
   log.metadata["column_map"] = map.source;
-  auto values = [&](size_t qi, size_t c) -> const std::vector<double>& {
-    return needed[slots_of_quantity[qi][c]].values;
-  };
-
-  log.t_s = Eigen::Map<const Eigen::VectorXd>(values(0, 0).data(), n);
-  for (int i = 1; i < n; ++i) {
-    if (!(log.t_s[i] > log.t_s[i - 1])) {
-      throw Error(Located(source, row_lines[i], 0,
-                          "time goes backwards or repeats: column '" + map.time.columns[0] + "' " +
-                              std::to_string(log.t_s[i]) + " s after " + std::to_string(log.t_s[i - 1]) + " s"));
-    }
-  }
-
-  // Vectors in the map's frames; converted to rotorid's (FLU body, z-up world) below.
-  auto vector3 = [&](size_t qi) {
-    const MappedQuantity& q = *quantities[qi];
-    Eigen::MatrixX3d out(n, 3);
-    for (int a = 0; a < 3; ++a) {
-      const auto& v = values(qi, a);
-      for (int i = 0; i < n; ++i) out(i, a) = v[i] * q.scale * q.unit_factor;
-    }
-    return out;
-  };
+  log.t_s = ReadTime(columns, map, source);
+  // Rows are samples: the frame change v' = F v is row' = row F (F symmetric).
   const Eigen::Matrix3d body_flip = FrameFlip(map.frame == BodyFrame::kFrd);
-  const Eigen::Matrix3d world_flip = FrameFlip(map.world_frame == WorldFrame::kNed);
-  log.gyro_radps = vector3(1) * body_flip;  // rows are samples: v' = F v  <=>  row' = row F (F symmetric)
-  log.acc_mps2 = vector3(2) * body_flip;
-
-  const int num_columns = static_cast<int>(rotor->columns.size());
-  log.rotor_radps.resize(n, num_columns);
-  for (int r = 0; r < num_columns; ++r) {
-    const auto& v = values(3, r);
-    for (int i = 0; i < n; ++i) {
-      double x = v[i] * rotor->scale;
-      if (rotor->is_command) {
-        // A command below the range's low end stops the motor: clamp at 0.
-        x = std::max(0.0, (x - rotor->range_low) / (rotor->range_high - rotor->range_low));
-      } else {
-        x *= rotor->unit_factor;
-        if (x < 0.0) {
-          throw Error(Located(source, row_lines[i], 0,
-                              "column '" + rotor->columns[r] + "' holds a negative rotor speed; rotor columns are " +
-                                  "|Omega| (map: " + Where(map.source, rotor->column_locations[r]) + ")"));
-        }
-      }
-      log.rotor_radps(i, r) = x;
-    }
-  }
-  log.metadata["rotor_signal"] = rotor->is_command ? "command" : "speed";
-  log.metadata["rotor_signal_unit"] = rotor->unit;
-  log.metadata["rotor_signal_columns"] = [&] {
-    std::string s;
-    for (const auto& c : rotor->columns) s += (s.empty() ? "" : ",") + c;
-    return s;
-  }();
-
-  size_t qi = 4;
-  if (map.position) {
-    MocapTrack mocap;
-    mocap.position_w_m = vector3(qi++) * world_flip;
-    mocap.bryant_rad.resize(n, 3);
-    if (map.quaternion) {
-      const size_t q_index = qi++;
-      for (int i = 0; i < n; ++i) {
-        Eigen::Quaterniond q(values(q_index, 0)[i], values(q_index, 1)[i], values(q_index, 2)[i],
-                             values(q_index, 3)[i]);
-        if (!(q.norm() > 0.5 && q.norm() < 2.0)) {
-          throw Error(Located(source, row_lines[i], 0,
-                              "the quaternion in columns " + map.quaternion->columns[0] + ".." +
-                                  map.quaternion->columns[3] + " has norm " + std::to_string(q.norm()) +
-                                  ", not a rotation"));
-        }
-        const Eigen::Matrix3d r = world_flip * q.normalized().toRotationMatrix() * body_flip;
-        mocap.bryant_rad.row(i) = RotationToBryant(r).transpose();
-      }
-    } else {
-      const Eigen::MatrixX3d angles = vector3(qi++);
-      const bool flip = map.frame == BodyFrame::kFrd || map.world_frame == WorldFrame::kNed;
-      for (int i = 0; i < n; ++i) {
-        const Eigen::Vector3d rpy = angles.row(i).transpose();
-        const Eigen::Vector3d converted = flip ? RotationToBryant(world_flip * BryantToRotation(rpy) * body_flip) : rpy;
-        mocap.bryant_rad.row(i) = converted.transpose();
-      }
-    }
-    log.mocap = std::move(mocap);
-  }
-  if (map.voltage) {
-    const auto& v = values(qi, 0);
-    Eigen::VectorXd volts(n);
-    for (int i = 0; i < n; ++i) volts[i] = v[i] * map.voltage->scale * map.voltage->unit_factor;
-    log.voltage_v = std::move(volts);
-  }
+  log.gyro_radps = columns.Vector3(map.gyro) * body_flip;
+  log.acc_mps2 = columns.Vector3(map.acc) * body_flip;
+  log.rotor_radps = ReadRotorSignal(columns, *rotor, map, source);
+  DescribeRotorSignal(*rotor, &log.metadata);
+  if (map.position) log.mocap = MocapFromColumns(columns, map, source);
+  if (map.voltage) log.voltage_v = columns.Scaled(*map.voltage, 0);
   return log;
 }
 

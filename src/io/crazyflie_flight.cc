@@ -74,6 +74,51 @@ std::string Format(const char* format, double value) {
   return buffer;
 }
 
+// The rotor signal and whether it is the motor command.
+struct RotorVariables {
+  Lookup columns;
+  bool is_command = false;
+};
+
+// `rotor_signal` (CrazyflieFlightOptions): measured speed rpm.m1..m4, the command (pwm.mN_pwm,
+// else motor.mN), or "auto": the speed when logged, else the command.
+RotorVariables ChooseRotorVariables(const CrazyflieUsdLog& usd, const UsdEventTable& imu,
+                                    const std::string& rotor_signal) {
+  const Lookup rpm(imu, Numbered("rpm.m", ""));
+  const Lookup pwm(imu, Numbered("pwm.m", "_pwm"));
+  const Lookup motor(imu, Numbered("motor.m", ""));
+  const Lookup* command = pwm.complete() ? &pwm : motor.complete() ? &motor : nullptr;
+  const std::string rpm_names = "rpm.m1..rpm.m4";
+  const std::string command_names = "pwm.m1_pwm..pwm.m4_pwm or motor.m1..motor.m4";
+  const Lookup* rotor = nullptr;
+  if (rotor_signal == "rpm") {
+    if (!rpm.complete()) FailMissing(usd, imu, "measured rotor speed " + Join(rpm.missing), rpm_names);
+    rotor = &rpm;
+  } else if (rotor_signal == "command") {
+    if (!command) FailMissing(usd, imu, "motor command", command_names);
+    rotor = command;
+  } else {
+    rotor = rpm.complete() ? &rpm : command;
+    if (!rotor) FailMissing(usd, imu, "rotor signal", rpm_names + " or " + command_names);
+  }
+  return {*rotor, rotor != &rpm};
+}
+
+// The battery voltage from pm.vbatMV, else pm.vbat, where every record holds a finite value.
+void AddVoltage(const UsdEventTable& imu, FlightLog* log) {
+  const int n = log->num_samples();
+  const auto all_finite = [n](const std::vector<double>* v) {
+    return std::all_of(v->begin(), v->begin() + n, [](double x) { return std::isfinite(x); });
+  };
+  if (const auto* mv = imu.FindColumn("pm.vbatMV"); mv && all_finite(mv)) {
+    log->voltage_v = Eigen::Map<const Eigen::VectorXd>(mv->data(), n) * 1e-3;
+    log->metadata["voltage_source"] = "pm.vbatMV";
+  } else if (const auto* v = imu.FindColumn("pm.vbat"); v && all_finite(v)) {
+    log->voltage_v = Eigen::Map<const Eigen::VectorXd>(v->data(), n);
+    log->metadata["voltage_source"] = "pm.vbat";
+  }
+}
+
 // Motion capture from the pose event, on the IMU time base. Leaves `log->mocap` empty (and says
 // why in the metadata) when the event holds no usable pose.
 void AddMocap(const UsdEventTable& pose, FlightLog* log) {
@@ -169,25 +214,9 @@ FlightLog CrazyflieUsdToFlight(const CrazyflieUsdLog& usd, int num_rotors, const
   const Lookup acc(*imu, {"acc.x", "acc.y", "acc.z"});
   if (!acc.complete()) FailMissing(usd, *imu, Join(acc.missing), Join(acc.names));
 
-  // Rotor signal.
-  const Lookup rpm(*imu, Numbered("rpm.m", ""));
-  const Lookup pwm(*imu, Numbered("pwm.m", "_pwm"));
-  const Lookup motor(*imu, Numbered("motor.m", ""));
-  const Lookup* command = pwm.complete() ? &pwm : motor.complete() ? &motor : nullptr;
-  const std::string rpm_names = "rpm.m1..rpm.m4";
-  const std::string command_names = "pwm.m1_pwm..pwm.m4_pwm or motor.m1..motor.m4";
-  const Lookup* rotor = nullptr;
-  if (options.rotor_signal == "rpm") {
-    if (!rpm.complete()) FailMissing(usd, *imu, "measured rotor speed " + Join(rpm.missing), rpm_names);
-    rotor = &rpm;
-  } else if (options.rotor_signal == "command") {
-    if (!command) FailMissing(usd, *imu, "motor command", command_names);
-    rotor = command;
-  } else {
-    rotor = rpm.complete() ? &rpm : command;
-    if (!rotor) FailMissing(usd, *imu, "rotor signal", rpm_names + " or " + command_names);
-  }
-  const bool is_command = rotor != &rpm;
+  const RotorVariables signal = ChooseRotorVariables(usd, *imu, options.rotor_signal);
+  const Lookup* rotor = &signal.columns;
+  const bool is_command = signal.is_command;
   const int n = imu->num_records();
   if (n < kMinFlightSamples) {
     throw Error(usd.source + ": event '" + imu->name + "' has " + std::to_string(n) + " records; at least " +
@@ -234,16 +263,7 @@ FlightLog CrazyflieUsdToFlight(const CrazyflieUsdLog& usd, int num_rotors, const
       log.rotor_radps(i, r) = is_command ? column[i] / kPwmFullScale : std::abs(column[i]) * kRpmToRadps;
     }
   }
-  const auto all_finite = [n](const std::vector<double>* v) {
-    return std::all_of(v->begin(), v->begin() + n, [](double x) { return std::isfinite(x); });
-  };
-  if (const auto* mv = imu->FindColumn("pm.vbatMV"); mv && all_finite(mv)) {
-    log.voltage_v = Eigen::Map<const Eigen::VectorXd>(mv->data(), n) * 1e-3;
-    log.metadata["voltage_source"] = "pm.vbatMV";
-  } else if (const auto* v = imu->FindColumn("pm.vbat"); v && all_finite(v)) {
-    log.voltage_v = Eigen::Map<const Eigen::VectorXd>(v->data(), n);
-    log.metadata["voltage_source"] = "pm.vbat";
-  }
+  AddVoltage(*imu, &log);
 
   log.metadata["source_format"] = "crazyflie_usd v" + std::to_string(usd.version);
   log.metadata["imu_event"] = imu->name + " (" + std::to_string(n) + " records)";

@@ -147,6 +147,224 @@ struct Decoder {  // per event type, for the record loop
   std::vector<int> offsets;
 };
 
+// Checks the magic byte, the version and (optionally) the trailing CRC, and fills those fields
+// of `log`. Returns where the records end: the CRC's offset.
+size_t ReadFraming(const uint8_t* data, size_t size, const CrazyflieUsdOptions& options, CrazyflieUsdLog* log) {
+  const std::string& source = log->source;
+  constexpr size_t kMinBytes = 1 + 2 + 2 + kCrcBytes;
+  if (size < kMinBytes) {
+    Fail(source, size,
+         "file too short (" + std::to_string(size) + " bytes) for a Crazyflie uSD log: the header and CRC alone take " +
+             std::to_string(kMinBytes));
+  }
+  if (data[0] != kUsdMagic) {
+    Fail(source, 0, "not a Crazyflie uSD log: first byte is " + Hex(data[0], 2) + ", expected 0xBC");
+  }
+  log->version = LoadU16(data + 1);
+  if (log->version != 1 && log->version != 2) {
+    Fail(source, 1, "unsupported uSD log version " + std::to_string(log->version) + " (versions 1 and 2 are known)");
+  }
+  const size_t end = size - kCrcBytes;
+  log->crc32 = LoadU32(data + end);
+  if (options.verify_crc) {
+    const uint32_t computed = Crc32(data, end);
+    if (computed != log->crc32) {
+      Fail(source, end,
+           "CRC32 mismatch: stored " + Hex(log->crc32, 8) + ", computed " + Hex(computed, 8) + " over bytes 0.." +
+               std::to_string(end - 1) + " (corrupt file, or cut off before logging stopped)");
+    }
+  }
+  return end;
+}
+
+// One "group.name(T)" declaration, T a type character; `names_so_far` catches repeats (views
+// into the file's bytes).
+UsdVariable ReadVariable(HeaderReader* header, const std::string& what, const std::string& source,
+                         std::unordered_set<std::string_view>* names_so_far) {
+  const size_t offset = header->pos();
+  const std::string_view text = header->CString(what);
+  // At least one name character, then '(', the type, ')'.
+  if (text.size() < 4 || text[text.size() - 3] != '(' || text.back() != ')') {
+    Fail(source, offset, what + " is '" + Printable(text) + "', expected 'name(T)' with a type character T");
+  }
+  UsdVariable variable;
+  variable.name = std::string(text.substr(0, text.size() - 3));
+  variable.type_char = text[text.size() - 2];
+  variable.size_bytes = TypeSize(variable.type_char);
+  if (variable.size_bytes == 0) {
+    Fail(source, offset,
+         what + " '" + Printable(variable.name) + "' has unknown type character '" +
+             Printable(std::string_view(&variable.type_char, 1)) + "' (known: B b H h I i f e)");
+  }
+  if (!names_so_far->insert(text.substr(0, text.size() - 3)).second) {
+    Fail(source, offset, what + " '" + Printable(variable.name) + "' is listed twice");
+  }
+  return variable;
+}
+
+// One event type of the header: id, name, variables (laid out in order, without padding).
+UsdEventTable ReadEventType(HeaderReader* header, const std::string& label, const std::string& source,
+                            std::unordered_set<std::string_view>* event_names) {
+  UsdEventTable event;
+  event.id = header->U16(("the id of " + label).c_str());
+  const size_t name_offset = header->pos();
+  const std::string_view name = header->CString("the name of " + label);
+  if (name.empty()) Fail(source, name_offset, "empty name for " + label);
+  event.name = std::string(name);
+  if (!event_names->insert(name).second) {
+    Fail(source, name_offset, "event name '" + Printable(name) + "' is defined twice");
+  }
+  const uint16_t num_variables = header->U16(("the variable count of event '" + Printable(name) + "'").c_str());
+  // Each variable takes at least 4 bytes; never trust the count for the reservation.
+  event.variables.reserve(std::min<size_t>(num_variables, header->remaining() / 4));
+  std::unordered_set<std::string_view> variable_names;
+  for (int v = 0; v < num_variables; ++v) {
+    const std::string what = "variable " + std::to_string(v + 1) + " of event '" + Printable(name) + "'";
+    UsdVariable variable = ReadVariable(header, what, source, &variable_names);
+    variable.offset_bytes = event.payload_bytes;
+    event.payload_bytes += variable.size_bytes;
+    event.variables.push_back(std::move(variable));
+  }
+  return event;
+}
+
+Decoder DecoderOf(const UsdEventTable& event) {
+  Decoder decoder;
+  decoder.payload_bytes = event.payload_bytes;
+  for (const UsdVariable& variable : event.variables) {
+    decoder.types.push_back(variable.type_char);
+    decoder.offsets.push_back(variable.offset_bytes);
+  }
+  return decoder;
+}
+
+// Event index by id: a sorted (id, index) list, searched per record after a check of the
+// previous record's id (real logs interleave one or two events). O(log E) whatever the header
+// declares, and no table sized by the id range.
+class EventIndex {
+ public:
+  // `id_offsets`: where each event's id is written, for the message about an id defined twice.
+  EventIndex(const std::vector<UsdEventTable>& events, const std::vector<size_t>& id_offsets,
+             const std::string& source) {
+    for (size_t k = 0; k < events.size(); ++k) by_id_.emplace_back(events[k].id, static_cast<int32_t>(k));
+    std::sort(by_id_.begin(), by_id_.end());
+    for (size_t k = 1; k < by_id_.size(); ++k) {
+      if (by_id_[k].first == by_id_[k - 1].first) {
+        const UsdEventTable& first = events[by_id_[k - 1].second];
+        const UsdEventTable& second = events[by_id_[k].second];
+        Fail(source, id_offsets[by_id_[k].second],
+             "event id " + std::to_string(first.id) + " is defined twice ('" + Printable(first.name) + "' and '" +
+                 Printable(second.name) + "')");
+      }
+    }
+  }
+
+  // The event's index, or -1 when the header does not define the id.
+  int32_t Find(uint16_t id) {
+    if (last_index_ >= 0 && last_id_ == id) return last_index_;
+    const auto it = std::lower_bound(by_id_.begin(), by_id_.end(), std::make_pair(id, int32_t{-1}));
+    if (it == by_id_.end() || it->first != id) return -1;
+    last_id_ = id;
+    return last_index_ = it->second;
+  }
+
+ private:
+  std::vector<std::pair<uint16_t, int32_t>> by_id_;
+  uint16_t last_id_ = 0;
+  int32_t last_index_ = -1;
+};
+
+struct EventTypes {
+  std::vector<Decoder> decoders;   // per event, for the record loop
+  std::vector<size_t> id_offsets;  // where each event's id is written, for messages
+};
+
+// The event table after the version; fills log->events and log->header_bytes.
+EventTypes ReadEventTypes(const uint8_t* data, size_t end, CrazyflieUsdLog* log) {
+  const std::string& source = log->source;
+  HeaderReader header(data, end, 3, source);
+  const uint16_t num_event_types = header.U16("the number of event types");
+  // Each event type takes at least 5 bytes; never trust the count for the reservation.
+  log->events.reserve(std::min<size_t>(num_event_types, header.remaining() / 5));
+  EventTypes types;
+  types.decoders.reserve(log->events.capacity());
+  std::unordered_set<std::string_view> event_names;  // views into the file's bytes
+  for (int e = 0; e < num_event_types; ++e) {
+    const std::string label = "event type " + std::to_string(e + 1) + " of " + std::to_string(num_event_types);
+    types.id_offsets.push_back(header.pos());
+    log->events.push_back(ReadEventType(&header, label, source, &event_names));
+    types.decoders.push_back(DecoderOf(log->events.back()));
+  }
+  log->header_bytes = header.pos();
+  return types;
+}
+
+std::string DescribeDefinedIds(const std::vector<UsdEventTable>& events) {
+  std::string defined;
+  for (size_t k = 0; k < events.size() && k < 8; ++k)
+    defined += (k ? ", " : "") + std::to_string(events[k].id) + " " + Printable(events[k].name);
+  if (events.size() > 8) defined += ", ...";
+  return defined.empty() ? std::string("none") : defined;
+}
+
+size_t RecordHeaderBytes(int version) { return version == 1 ? 2 + 4 : 2 + 8; }
+
+// First pass over the records: checks their framing and counts them per event.
+std::vector<size_t> CountRecords(const uint8_t* data, size_t end, const CrazyflieUsdLog& log,
+                                 const std::vector<Decoder>& decoders, EventIndex* index) {
+  const size_t record_header = RecordHeaderBytes(log.version);
+  std::vector<size_t> counts(log.events.size(), 0);
+  for (size_t pos = log.header_bytes; pos < end;) {
+    if (end - pos < record_header) {
+      Fail(log.source, pos,
+           "record header needs " + std::to_string(record_header) + " bytes, only " + std::to_string(end - pos) +
+               " are left before the CRC (truncated record)");
+    }
+    const uint16_t id = LoadU16(data + pos);
+    const int32_t event = index->Find(id);
+    if (event < 0) {
+      Fail(log.source, pos,
+           "record with event id " + std::to_string(id) +
+               ", which the header does not define (defined: " + DescribeDefinedIds(log.events) + ")");
+    }
+    const size_t record_bytes = record_header + static_cast<size_t>(decoders[event].payload_bytes);
+    if (end - pos < record_bytes) {
+      Fail(log.source, pos,
+           "record of event '" + Printable(log.events[event].name) + "' needs " + std::to_string(record_bytes) +
+               " bytes, only " + std::to_string(end - pos) + " are left before the CRC (truncated record)");
+    }
+    ++counts[event];
+    pos += record_bytes;
+  }
+  return counts;
+}
+
+// Second pass, over records CountRecords has checked: into columns allocated once.
+void DecodeRecords(const uint8_t* data, size_t end, const std::vector<Decoder>& decoders,
+                   const std::vector<size_t>& counts, EventIndex* index, CrazyflieUsdLog* log) {
+  for (size_t k = 0; k < log->events.size(); ++k) {
+    UsdEventTable& event = log->events[k];
+    event.timestamp_us.resize(counts[k]);
+    event.columns.assign(event.variables.size(), std::vector<double>(counts[k]));
+  }
+  const size_t record_header = RecordHeaderBytes(log->version);
+  std::vector<size_t> rows(log->events.size(), 0);
+  for (size_t pos = log->header_bytes; pos < end;) {
+    const int32_t k = index->Find(LoadU16(data + pos));
+    UsdEventTable& event = log->events[k];
+    const Decoder& decoder = decoders[k];
+    const size_t row = rows[k]++;
+    // Version 1 stamps FreeRTOS ticks (1 kHz on the Crazyflie), version 2 microseconds.
+    event.timestamp_us[row] =
+        log->version == 1 ? static_cast<uint64_t>(LoadU32(data + pos + 2)) * 1000u : LoadU64(data + pos + 2);
+    const uint8_t* payload = data + pos + record_header;
+    for (size_t v = 0; v < decoder.types.size(); ++v) {
+      event.columns[v][row] = DecodeValue(decoder.types[v], payload + decoder.offsets[v]);
+    }
+    pos += record_header + static_cast<size_t>(decoder.payload_bytes);
+  }
+}
+
 }  // namespace
 
 uint32_t Crc32(const void* data, size_t size, uint32_t crc) {
@@ -205,167 +423,15 @@ std::string CrazyflieUsdLog::DescribeEvents() const {
 CrazyflieUsdLog ParseCrazyflieUsd(std::string_view bytes, const std::string& source,
                                   const CrazyflieUsdOptions& options) {
   const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
-  const size_t size = bytes.size();
   CrazyflieUsdLog log;
   log.source = source;
-
-  constexpr size_t kMinBytes = 1 + 2 + 2 + kCrcBytes;
-  if (size < kMinBytes) {
-    Fail(source, size,
-         "file too short (" + std::to_string(size) + " bytes) for a Crazyflie uSD log: the header and CRC alone take " +
-             std::to_string(kMinBytes));
-  }
-  if (data[0] != kUsdMagic) {
-    Fail(source, 0, "not a Crazyflie uSD log: first byte is " + Hex(data[0], 2) + ", expected 0xBC");
-  }
-  log.version = LoadU16(data + 1);
-  if (log.version != 1 && log.version != 2) {
-    Fail(source, 1, "unsupported uSD log version " + std::to_string(log.version) + " (versions 1 and 2 are known)");
-  }
-  const size_t end = size - kCrcBytes;  // records stop where the CRC starts
-  log.crc32 = LoadU32(data + end);
-  if (options.verify_crc) {
-    const uint32_t computed = Crc32(data, end);
-    if (computed != log.crc32) {
-      Fail(source, end,
-           "CRC32 mismatch: stored " + Hex(log.crc32, 8) + ", computed " + Hex(computed, 8) + " over bytes 0.." +
-               std::to_string(end - 1) + " (corrupt file, or cut off before logging stopped)");
-    }
-  }
-
-  // Event table.
-  HeaderReader header(data, end, 3, source);
-  const uint16_t num_event_types = header.U16("the number of event types");
-  // Each event type takes at least 5 bytes; never trust the count for the reservation.
-  log.events.reserve(std::min<size_t>(num_event_types, header.remaining() / 5));
-  std::vector<Decoder> decoders;
-  decoders.reserve(log.events.capacity());
-  // Event index by id: a sorted (id, index) list, searched per record after a check of the
-  // previous record's id (real logs interleave one or two events). O(log E) whatever the header
-  // declares, and no table sized by the id range.
-  std::vector<std::pair<uint16_t, int32_t>> id_index;
-  std::vector<size_t> id_offsets;  // where each event type's id is written, for messages
-  std::unordered_set<std::string_view> event_names;
-  for (int e = 0; e < num_event_types; ++e) {
-    const std::string label = "event type " + std::to_string(e + 1) + " of " + std::to_string(num_event_types);
-    UsdEventTable event;
-    const size_t id_offset = header.pos();
-    event.id = header.U16(("the id of " + label).c_str());
-    id_index.emplace_back(event.id, static_cast<int32_t>(log.events.size()));
-    id_offsets.push_back(id_offset);
-    const size_t name_offset = header.pos();
-    const std::string_view name = header.CString("the name of " + label);
-    if (name.empty()) Fail(source, name_offset, "empty name for " + label);
-    event.name = std::string(name);
-    if (!event_names.insert(name).second) {
-      Fail(source, name_offset, "event name '" + Printable(name) + "' is defined twice");
-    }
-    const uint16_t num_variables = header.U16(("the variable count of event '" + Printable(name) + "'").c_str());
-    event.variables.reserve(std::min<size_t>(num_variables, header.remaining() / 4));
-    Decoder decoder;
-    std::unordered_set<std::string_view> variable_names;  // views into `bytes`, which outlive the loop
-    for (int v = 0; v < num_variables; ++v) {
-      const size_t variable_offset = header.pos();
-      const std::string what = "variable " + std::to_string(v + 1) + " of event '" + Printable(name) + "'";
-      const std::string_view text = header.CString(what);
-      // "group.name(T)": at least one name character, then '(', the type, ')'.
-      if (text.size() < 4 || text[text.size() - 3] != '(' || text.back() != ')') {
-        Fail(source, variable_offset,
-             what + " is '" + Printable(text) + "', expected 'name(T)' with a type character T");
-      }
-      UsdVariable variable;
-      variable.name = std::string(text.substr(0, text.size() - 3));
-      variable.type_char = text[text.size() - 2];
-      variable.size_bytes = TypeSize(variable.type_char);
-      if (variable.size_bytes == 0) {
-        Fail(source, variable_offset,
-             what + " '" + Printable(variable.name) + "' has unknown type character '" +
-                 Printable(std::string_view(&variable.type_char, 1)) + "' (known: B b H h I i f e)");
-      }
-      if (!variable_names.insert(text.substr(0, text.size() - 3)).second) {
-        Fail(source, variable_offset, what + " '" + Printable(variable.name) + "' is listed twice");
-      }
-      variable.offset_bytes = event.payload_bytes;
-      event.payload_bytes += variable.size_bytes;
-      decoder.types.push_back(variable.type_char);
-      decoder.offsets.push_back(variable.offset_bytes);
-      event.variables.push_back(std::move(variable));
-    }
-    decoder.payload_bytes = event.payload_bytes;
-    log.events.push_back(std::move(event));
-    decoders.push_back(std::move(decoder));
-  }
-  log.header_bytes = header.pos();
-  std::sort(id_index.begin(), id_index.end());
-  for (size_t k = 1; k < id_index.size(); ++k) {
-    if (id_index[k].first == id_index[k - 1].first) {
-      const UsdEventTable& first = log.events[id_index[k - 1].second];
-      const UsdEventTable& second = log.events[id_index[k].second];
-      Fail(source, id_offsets[id_index[k].second],
-           "event id " + std::to_string(first.id) + " is defined twice ('" + Printable(first.name) + "' and '" +
-               Printable(second.name) + "')");
-    }
-  }
-  int32_t last_index = -1;
-  auto event_of_id = [&](uint16_t id) -> int32_t {
-    if (last_index >= 0 && log.events[last_index].id == id) return last_index;
-    const auto it = std::lower_bound(id_index.begin(), id_index.end(), std::make_pair(id, int32_t{-1}));
-    if (it == id_index.end() || it->first != id) return -1;
-    return last_index = it->second;
-  };
-
-  // Records, in two passes: the first validates framing and counts records per event, so that
-  // the second decodes into columns allocated once (no allocation per record).
-  const size_t record_header = log.version == 1 ? 2 + 4 : 2 + 8;
-  const size_t num_events = log.events.size();
-  std::vector<size_t> counts(num_events, 0);
-  for (size_t pos = log.header_bytes; pos < end;) {
-    if (end - pos < record_header) {
-      Fail(source, pos,
-           "record header needs " + std::to_string(record_header) + " bytes, only " + std::to_string(end - pos) +
-               " are left before the CRC (truncated record)");
-    }
-    const uint16_t id = LoadU16(data + pos);
-    const int32_t index = event_of_id(id);
-    if (index < 0) {
-      std::string defined;
-      for (size_t k = 0; k < num_events && k < 8; ++k)
-        defined += (k ? ", " : "") + std::to_string(log.events[k].id) + " " + Printable(log.events[k].name);
-      if (num_events > 8) defined += ", ...";
-      Fail(source, pos,
-           "record with event id " + std::to_string(id) + ", which the header does not define (defined: " +
-               (defined.empty() ? std::string("none") : defined) + ")");
-    }
-    const size_t record_bytes = record_header + static_cast<size_t>(decoders[index].payload_bytes);
-    if (end - pos < record_bytes) {
-      Fail(source, pos,
-           "record of event '" + Printable(log.events[index].name) + "' needs " + std::to_string(record_bytes) +
-               " bytes, only " + std::to_string(end - pos) + " are left before the CRC (truncated record)");
-    }
-    ++counts[index];
-    pos += record_bytes;
-  }
-
-  for (size_t k = 0; k < num_events; ++k) {
-    UsdEventTable& event = log.events[k];
-    event.timestamp_us.resize(counts[k]);
-    event.columns.assign(event.variables.size(), std::vector<double>(counts[k]));
-  }
-  std::vector<size_t> rows(num_events, 0);
-  for (size_t pos = log.header_bytes; pos < end;) {
-    const int32_t index = event_of_id(LoadU16(data + pos));  // validated above
-    UsdEventTable& event = log.events[index];
-    const Decoder& decoder = decoders[index];
-    const size_t row = rows[index]++;
-    // Version 1 stamps FreeRTOS ticks (1 kHz on the Crazyflie), version 2 microseconds.
-    event.timestamp_us[row] =
-        log.version == 1 ? static_cast<uint64_t>(LoadU32(data + pos + 2)) * 1000u : LoadU64(data + pos + 2);
-    const uint8_t* payload = data + pos + record_header;
-    for (size_t v = 0; v < decoder.types.size(); ++v) {
-      event.columns[v][row] = DecodeValue(decoder.types[v], payload + decoder.offsets[v]);
-    }
-    pos += record_header + static_cast<size_t>(decoder.payload_bytes);
-  }
+  const size_t end = ReadFraming(data, bytes.size(), options, &log);
+  const EventTypes types = ReadEventTypes(data, end, &log);
+  EventIndex index(log.events, types.id_offsets, source);
+  // Records in two passes: the first checks framing and counts records per event, so that the
+  // second decodes into columns allocated once (no allocation per record).
+  const std::vector<size_t> counts = CountRecords(data, end, log, types.decoders, &index);
+  DecodeRecords(data, end, types.decoders, counts, &index, &log);
   return log;
 }
 

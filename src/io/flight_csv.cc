@@ -1,5 +1,7 @@
 #include "rotorid/io/flight_csv.h"
 
+#include <fast_float/fast_float.h>
+
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -7,8 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include <fast_float/fast_float.h>
-
+#include "io/csv_text.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/rotation.h"
@@ -16,18 +17,15 @@
 namespace rotorid {
 namespace {
 
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
+using internal::TrimSpaces;
 
 std::vector<std::string_view> SplitCells(std::string_view line) {
   std::vector<std::string_view> cells;
   size_t start = 0;
   while (true) {
     const size_t comma = line.find(',', start);
-    cells.push_back(Trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    cells.push_back(
+        TrimSpaces(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
@@ -43,197 +41,230 @@ int CellColumn(std::string_view line, size_t cell_index) {
 
 // The columns INTERFACE.md section 2 defines; any other column is ignored, whatever it holds.
 bool IsKnownColumn(const std::string& name) {
-  static const char* const kNames[] = {"t",     "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y",  "acc_z",
-                                       "pos_x", "pos_y",  "pos_z",  "roll",   "pitch", "yaw",    "qw",
-                                       "qx",    "qy",     "qz",     "vel_x",  "vel_y", "vel_z",  "voltage"};
+  static const char* const kNames[] = {"t",     "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
+                                       "pos_x", "pos_y",  "pos_z",  "roll",   "pitch", "yaw",   "qw",
+                                       "qx",    "qy",     "qz",     "vel_x",  "vel_y", "vel_z", "voltage"};
   for (const char* known : kNames)
     if (name == known) return true;
   return name.size() > 6 && name.compare(0, 6, "rotor_") == 0 &&
          name.find_first_not_of("0123456789", 6) == std::string::npos;
 }
 
-struct ColumnSet {
-  std::map<std::string, int> index;  // name -> cell index
+// The file as read: metadata, header, and the values of every column rotorid reads.
+struct FlightTable {
+  std::string source;
+  std::map<std::string, std::string> metadata;
+  bool has_header = false;
+  int header_line = 0;
+  std::string_view header_text;
+  std::vector<std::string> names;         // per cell
+  std::vector<bool> known;                // per cell: a column rotorid reads
+  std::map<std::string, int> index;       // name -> cell
+  std::vector<std::vector<double>> data;  // per cell; empty for ignored columns
+  std::vector<int> row_lines;             // file line of each data row
+
   std::optional<int> Find(const std::string& name) const {
     const auto it = index.find(name);
     if (it == index.end()) return std::nullopt;
     return it->second;
   }
+  int Require(const std::string& name) const {
+    const auto k = Find(name);
+    if (!k) throw Error(Located(source, header_line, 0, "missing required column '" + name + "'"));
+    return *k;
+  }
+  Eigen::Map<const Eigen::VectorXd> Column(int cell) const {
+    return {data[cell].data(), static_cast<Eigen::Index>(row_lines.size())};
+  }
 };
+
+// "# key: value" (key without spaces) is metadata; other comments say nothing.
+void ReadCommentLine(std::string_view trimmed, std::map<std::string, std::string>* metadata) {
+  const std::string_view body = TrimSpaces(trimmed.substr(1));
+  const size_t colon = body.find(':');
+  if (colon != std::string_view::npos && colon > 0 && body.substr(0, colon).find(' ') == std::string_view::npos)
+    (*metadata)[std::string(TrimSpaces(body.substr(0, colon)))] = std::string(TrimSpaces(body.substr(colon + 1)));
+}
+
+void ReadHeader(const internal::TextLine& line, FlightTable* table) {
+  table->has_header = true;
+  table->header_line = line.number;
+  table->header_text = line.text;
+  const auto names = SplitCells(line.text);
+  for (size_t k = 0; k < names.size(); ++k) {
+    const std::string name(names[k]);
+    table->names.push_back(name);
+    table->known.push_back(IsKnownColumn(name));
+    if (name.empty())
+      throw Error(Located(table->source, line.number, CellColumn(line.text, k), "empty column name in header"));
+    if (!table->index.emplace(name, static_cast<int>(k)).second)
+      throw Error(Located(table->source, line.number, CellColumn(line.text, k), "duplicate column '" + name + "'"));
+  }
+  table->data.resize(names.size());
+}
+
+// Only the columns rotorid reads must hold numbers.
+void ReadRow(const internal::TextLine& line, FlightTable* table) {
+  const auto cells = SplitCells(line.text);
+  if (cells.size() != table->names.size()) {
+    throw Error(Located(table->source, line.number, 0,
+                        "row has " + std::to_string(cells.size()) + " cells, the header has " +
+                            std::to_string(table->names.size()) + " (truncated or malformed row)"));
+  }
+  for (size_t k = 0; k < cells.size(); ++k) {
+    if (!table->known[k]) continue;
+    const std::optional<double> value = internal::ParseNumber(cells[k]);
+    if (!value) {
+      throw Error(Located(table->source, line.number, CellColumn(line.text, k),
+                          "column '" + table->names[k] + "' is not a number: '" + std::string(cells[k]) + "'"));
+    }
+    if (!std::isfinite(*value)) {
+      throw Error(
+          Located(table->source, line.number, CellColumn(line.text, k),
+                  "column '" + table->names[k] + "' holds '" + std::string(cells[k]) + "', not a finite number"));
+    }
+    table->data[k].push_back(*value);
+  }
+  table->row_lines.push_back(line.number);
+}
+
+// Blank lines are skipped; '#' lines are comments wherever they stand; the first other line is
+// the header.
+FlightTable ReadTable(const std::string& text, const std::string& source) {
+  FlightTable table;
+  table.source = source;
+  std::string_view rest(text);
+  int line_number = 0;
+  internal::TextLine line;
+  while (internal::NextLine(&rest, &line_number, &line)) {
+    const std::string_view trimmed = TrimSpaces(line.text);
+    if (trimmed.empty()) continue;
+    if (trimmed.front() == '#') {
+      ReadCommentLine(trimmed, &table.metadata);
+    } else if (!table.has_header) {
+      ReadHeader(line, &table);
+    } else {
+      ReadRow(line, &table);
+    }
+  }
+  if (!table.has_header) throw Error(source + ": empty file: no header line and no samples");
+  return table;
+}
+
+Eigen::MatrixX3d ReadVector3(const FlightTable& table, const std::string& prefix) {
+  Eigen::MatrixX3d out(table.row_lines.size(), 3);
+  const char* axes[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) out.col(a) = table.Column(table.Require(prefix + axes[a]));
+  return out;
+}
+
+// rotor_1..rotor_N; N from the header when `num_rotors` < 0.
+Eigen::MatrixXd ReadRotors(const FlightTable& table, int num_rotors) {
+  const std::string& source = table.source;
+  if (num_rotors < 0) {
+    num_rotors = 0;
+    while (table.Find("rotor_" + std::to_string(num_rotors + 1))) ++num_rotors;
+    if (num_rotors == 0) throw Error(Located(source, table.header_line, 0, "missing required column 'rotor_1'"));
+  }
+  // A rotor the vehicle file leaves out would be dropped silently.
+  if (const auto extra = table.Find("rotor_" + std::to_string(num_rotors + 1)))
+    throw Error(Located(source, table.header_line, CellColumn(table.header_text, *extra),
+                        "the log has column 'rotor_" + std::to_string(num_rotors + 1) + "' but the vehicle file has " +
+                            std::to_string(num_rotors) + " rotors: give every rotor in the vehicle file"));
+  std::vector<int> rotor_columns;  // all located before any allocation that scales with the count
+  for (int r = 0; r < num_rotors; ++r) rotor_columns.push_back(table.Require("rotor_" + std::to_string(r + 1)));
+  Eigen::MatrixXd rotors(table.row_lines.size(), num_rotors);
+  for (int r = 0; r < num_rotors; ++r) {
+    rotors.col(r) = table.Column(rotor_columns[r]);
+    if ((rotors.col(r).array() < 0.0).any())
+      throw Error(Located(
+          source, table.header_line, 0,
+          "column 'rotor_" + std::to_string(r + 1) + "' has negative rotor speeds; it must hold |Omega| in rad/s"));
+  }
+  return rotors;
+}
+
+// roll, pitch, yaw, else the quaternion qw, qx, qy, qz turned into them.
+Eigen::MatrixX3d ReadAttitude(const FlightTable& table) {
+  const int n = static_cast<int>(table.row_lines.size());
+  Eigen::MatrixX3d bryant(n, 3);
+  if (table.Find("roll")) {
+    bryant.col(0) = table.Column(table.Require("roll"));
+    bryant.col(1) = table.Column(table.Require("pitch"));
+    bryant.col(2) = table.Column(table.Require("yaw"));
+  } else if (table.Find("qw")) {
+    const auto qw = table.Column(table.Require("qw")), qx = table.Column(table.Require("qx")),
+               qy = table.Column(table.Require("qy")), qz = table.Column(table.Require("qz"));
+    for (int i = 0; i < n; ++i) {
+      Eigen::Quaterniond q(qw[i], qx[i], qy[i], qz[i]);
+      if (!(q.norm() > 0.5))
+        throw Error(table.source + ": quaternion of data row " + std::to_string(i + 1) + " is not a rotation");
+      bryant.row(i) = RotationToBryant(q.normalized().toRotationMatrix()).transpose();
+    }
+  } else {
+    throw Error(Located(table.source, table.header_line, 0, "pos_x..z given without roll,pitch,yaw or qw,qx,qy,qz"));
+  }
+  return bryant;
+}
+
+// Position with attitude, and the velocity when given; the velocity alone is refused.
+std::optional<MocapTrack> ReadMocap(const FlightTable& table) {
+  if (!table.Find("pos_x")) {
+    if (const auto k = table.Find("vel_x")) {
+      throw Error(Located(table.source, table.header_line, CellColumn(table.header_text, *k),
+                          "vel_x..z (world frame) need the pose (pos_x..z with roll,pitch,yaw or qw,qx,qy,qz) to be "
+                          "turned into the body frame"));
+    }
+    return std::nullopt;
+  }
+  MocapTrack mocap;
+  mocap.position_w_m = ReadVector3(table, "pos_");
+  mocap.bryant_rad = ReadAttitude(table);
+  if (table.Find("vel_x")) mocap.velocity_w_mps = ReadVector3(table, "vel_");
+  return mocap;
+}
+
+// Metadata 'gravity', else standard gravity.
+double ReadGravity(const std::map<std::string, std::string>& metadata, const std::string& source) {
+  const auto it = metadata.find("gravity");
+  if (it == metadata.end()) return kStandardGravity;
+  double g = 0.0;
+  // Unlike a data cell, the number may be followed by text ("9.81 m/s^2").
+  const auto result = fast_float::from_chars(it->second.data(), it->second.data() + it->second.size(), g);
+  if (result.ec != std::errc() || !(g > 0.0) || !std::isfinite(g))
+    throw Error(source + ": metadata 'gravity' must be a positive number, got '" + it->second + "'");
+  return g;
+}
 
 }  // namespace
 
 FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int num_rotors) {
+  FlightTable table = ReadTable(text, source);
+  const int t_col = table.Require("t");
+  for (const char* name : {"gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"}) table.Require(name);
+  internal::RequireMinFlightSamples(source, static_cast<int>(table.row_lines.size()));
+
   FlightLog log;
   log.source = source;
-  std::string_view rest(text);
-  int line_number = 0;
-  std::optional<ColumnSet> columns;
-  int header_line = 0;
-  std::string_view header_text;
-  size_t num_cells = 0;
-  std::vector<std::string> header_names;
-  std::vector<std::vector<double>> data;  // per column index (cell index)
-  std::vector<bool> known;                 // per cell index: a column rotorid reads
-
-  while (!rest.empty()) {
-    const size_t newline = rest.find('\n');
-    std::string_view line = rest.substr(0, newline);
-    rest = newline == std::string_view::npos ? std::string_view() : rest.substr(newline + 1);
-    ++line_number;
-    const std::string_view trimmed = Trim(line);
-    if (trimmed.empty()) continue;
-    if (trimmed.front() == '#') {
-      const std::string_view body = Trim(trimmed.substr(1));
-      const size_t colon = body.find(':');
-      if (colon != std::string_view::npos && colon > 0 && body.substr(0, colon).find(' ') == std::string_view::npos)
-        log.metadata[std::string(Trim(body.substr(0, colon)))] = std::string(Trim(body.substr(colon + 1)));
-      continue;
-    }
-    if (!columns) {
-      columns.emplace();
-      header_line = line_number;
-      header_text = line;
-      const auto names = SplitCells(line);
-      num_cells = names.size();
-      for (size_t k = 0; k < names.size(); ++k) {
-        const std::string name(names[k]);
-        header_names.push_back(name);
-        known.push_back(IsKnownColumn(name));
-        if (name.empty()) throw Error(Located(source, line_number, CellColumn(line, k), "empty column name in header"));
-        if (!columns->index.emplace(name, static_cast<int>(k)).second)
-          throw Error(Located(source, line_number, CellColumn(line, k), "duplicate column '" + name + "'"));
-      }
-      data.resize(num_cells);
-      continue;
-    }
-    const auto cells = SplitCells(line);
-    if (cells.size() != num_cells) {
-      throw Error(Located(source, line_number, 0,
-                          "row has " + std::to_string(cells.size()) + " cells, the header has " +
-                              std::to_string(num_cells) + " (truncated or malformed row)"));
-    }
-    for (size_t k = 0; k < cells.size(); ++k) {
-      if (!known[k]) continue;
-      double value = 0.0;
-      const char* first = cells[k].data();
-      const char* last = first + cells[k].size();
-      const auto result = fast_float::from_chars(first, last, value);
-      if (cells[k].empty() || result.ec != std::errc() || result.ptr != last) {
-        throw Error(Located(source, line_number, CellColumn(line, k),
-                            "column '" + header_names[k] + "' is not a number: '" + std::string(cells[k]) + "'"));
-      }
-      if (!std::isfinite(value)) {
-        throw Error(Located(source, line_number, CellColumn(line, k),
-                            "column '" + header_names[k] + "' holds '" + std::string(cells[k]) + "', not a finite number"));
-      }
-      data[k].push_back(value);
-    }
+  log.t_s = table.Column(t_col);
+  if (const std::optional<int> i = internal::FirstNonIncreasingTime(log.t_s)) {
+    throw Error(Located(source, table.row_lines[*i], 1,
+                        "time goes backwards or repeats: t = " + std::to_string(log.t_s[*i]) + " after " +
+                            std::to_string(log.t_s[*i - 1])));
   }
-  if (!columns) throw Error(source + ": empty file: no header line and no samples");
-
-  auto require = [&](const std::string& name) -> int {
-    const auto k = columns->Find(name);
-    if (!k) throw Error(Located(source, header_line, 0, "missing required column '" + name + "'"));
-    return *k;
-  };
-  const int t_col = require("t");
-  for (const char* name : {"gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"}) require(name);
-  const int n = static_cast<int>(data[t_col].size());
-  if (n < kMinFlightSamples)
-    throw Error(source + ": too few samples (" + std::to_string(n) + "); at least " +
-                std::to_string(kMinFlightSamples) + " are needed");
-
-  auto column = [&](int k) { return Eigen::Map<const Eigen::VectorXd>(data[k].data(), n); };
-  log.t_s = column(t_col);
-  // Data rows start after the header; blank and comment lines are rare, so locate rows by scanning.
-  for (int i = 1; i < n; ++i) {
-    if (!(log.t_s[i] > log.t_s[i - 1])) {
-      // Find the file line of data row i for the message.
-      int row = -1, line_no = 0;
-      std::string_view scan(text);
-      while (!scan.empty()) {
-        const size_t nl = scan.find('\n');
-        const std::string_view l = Trim(scan.substr(0, nl));
-        scan = nl == std::string_view::npos ? std::string_view() : scan.substr(nl + 1);
-        ++line_no;
-        if (line_no <= header_line || l.empty() || l.front() == '#') continue;
-        if (++row == i) break;
-      }
-      throw Error(Located(source, line_no, 1,
-                          "time goes backwards or repeats: t = " + std::to_string(log.t_s[i]) + " after " +
-                              std::to_string(log.t_s[i - 1])));
-    }
-  }
-  const char* axes[3] = {"x", "y", "z"};
-  log.gyro_radps.resize(n, 3);
-  log.acc_mps2.resize(n, 3);
-  for (int a = 0; a < 3; ++a) {
-    log.gyro_radps.col(a) = column(require(std::string("gyro_") + axes[a]));
-    log.acc_mps2.col(a) = column(require(std::string("acc_") + axes[a]));
-  }
-  if (num_rotors < 0) {
-    num_rotors = 0;
-    while (columns->Find("rotor_" + std::to_string(num_rotors + 1))) ++num_rotors;
-    if (num_rotors == 0) throw Error(Located(source, header_line, 0, "missing required column 'rotor_1'"));
-  }
-  // A rotor the vehicle file leaves out would be dropped silently.
-  if (const auto extra = columns->Find("rotor_" + std::to_string(num_rotors + 1)))
-    throw Error(Located(source, header_line, CellColumn(header_text, *extra),
-                        "the log has column 'rotor_" + std::to_string(num_rotors + 1) + "' but the vehicle file has " +
-                            std::to_string(num_rotors) + " rotors: give every rotor in the vehicle file"));
-  std::vector<int> rotor_columns;  // all located before any allocation that scales with the count
-  for (int r = 0; r < num_rotors; ++r) rotor_columns.push_back(require("rotor_" + std::to_string(r + 1)));
-  log.rotor_radps.resize(n, num_rotors);
-  for (int r = 0; r < num_rotors; ++r) {
-    const std::string name = "rotor_" + std::to_string(r + 1);
-    log.rotor_radps.col(r) = column(rotor_columns[r]);
-    if ((log.rotor_radps.col(r).array() < 0.0).any())
-      throw Error(Located(source, header_line, 0, "column '" + name + "' has negative rotor speeds; it must hold |Omega| in rad/s"));
-  }
-  if (columns->Find("pos_x")) {
-    MocapTrack mocap;
-    mocap.position_w_m.resize(n, 3);
-    for (int a = 0; a < 3; ++a) mocap.position_w_m.col(a) = column(require(std::string("pos_") + axes[a]));
-    mocap.bryant_rad.resize(n, 3);
-    if (columns->Find("roll")) {
-      mocap.bryant_rad.col(0) = column(require("roll"));
-      mocap.bryant_rad.col(1) = column(require("pitch"));
-      mocap.bryant_rad.col(2) = column(require("yaw"));
-    } else if (columns->Find("qw")) {
-      const auto qw = column(require("qw")), qx = column(require("qx")), qy = column(require("qy")),
-                 qz = column(require("qz"));
-      for (int i = 0; i < n; ++i) {
-        Eigen::Quaterniond q(qw[i], qx[i], qy[i], qz[i]);
-        if (!(q.norm() > 0.5)) throw Error(source + ": quaternion of data row " + std::to_string(i + 1) + " is not a rotation");
-        mocap.bryant_rad.row(i) = RotationToBryant(q.normalized().toRotationMatrix()).transpose();
-      }
-    } else {
-      throw Error(Located(source, header_line, 0, "pos_x..z given without roll,pitch,yaw or qw,qx,qy,qz"));
-    }
-    if (columns->Find("vel_x")) {
-      Eigen::MatrixX3d velocity(n, 3);
-      for (int a = 0; a < 3; ++a) velocity.col(a) = column(require(std::string("vel_") + axes[a]));
-      mocap.velocity_w_mps = std::move(velocity);
-    }
-    log.mocap = std::move(mocap);
-  } else if (const auto k = columns->Find("vel_x")) {
-    throw Error(Located(source, header_line, CellColumn(header_text, *k),
-                        "vel_x..z (world frame) need the pose (pos_x..z with roll,pitch,yaw or qw,qx,qy,qz) to be "
-                        "turned into the body frame"));
-  }
-  if (const auto k = columns->Find("voltage")) log.voltage_v = column(*k);
-  if (const auto it = log.metadata.find("gravity"); it != log.metadata.end()) {
-    double g = 0.0;
-    const auto result = fast_float::from_chars(it->second.data(), it->second.data() + it->second.size(), g);
-    if (result.ec != std::errc() || !(g > 0.0) || !std::isfinite(g))
-      throw Error(source + ": metadata 'gravity' must be a positive number, got '" + it->second + "'");
-    log.gravity_mps2 = g;
-  }
+  log.gyro_radps = ReadVector3(table, "gyro_");
+  log.acc_mps2 = ReadVector3(table, "acc_");
+  log.rotor_radps = ReadRotors(table, num_rotors);
+  log.mocap = ReadMocap(table);
+  if (const auto k = table.Find("voltage")) log.voltage_v = table.Column(*k);
+  log.gravity_mps2 = ReadGravity(table.metadata, source);
+  log.metadata = std::move(table.metadata);
   return log;
 }
 
-FlightLog ReadFlightCsv(const std::string& path, int num_rotors) { return ParseFlightCsv(ReadFile(path), path, num_rotors); }
+FlightLog ReadFlightCsv(const std::string& path, int num_rotors) {
+  return ParseFlightCsv(ReadFile(path), path, num_rotors);
+}
 
 namespace {
 void AppendNumber(std::string* out, double value, int precision) {
