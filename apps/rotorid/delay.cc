@@ -40,9 +40,10 @@ Command AddDelayCommand(CLI::App& root) {
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
     std::vector<Check> checks;
     const IdentificationResult linear = IdentifyWithChecks(loaded.flights, identify, &checks);
-    Progress progress("delay: search and refinement", 0, options->flights.quiet);
+    Progress progress("delay: search and Ceres passes", DelaySteps(options->delay), options->flights.quiet);
     progress.StartTicking();
-    const DelayEstimate estimate = EstimateDelay(linear, options->delay);
+    const DelayEstimate estimate =
+        EstimateDelay(linear, options->delay, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
     nlohmann::json curve = nlohmann::json::array();

@@ -102,9 +102,9 @@ Command AddRefineCommand(CLI::App& root) {
     std::vector<Check> checks;
     const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
     refine.effects = EffectsForFlights(options->effects, linear, options->flights.quiet);
-    Progress progress("refine: Ceres", 0, options->flights.quiet);
+    Progress progress("refine: delay search and Ceres passes", RefineSteps(refine), options->flights.quiet);
     progress.StartTicking();
-    const RefineResult refined = Refine(linear, refine);
+    const RefineResult refined = Refine(linear, refine, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
 

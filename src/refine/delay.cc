@@ -26,7 +26,25 @@ std::vector<double> DelayCriterionCurve(const IdentificationResult& linear, cons
   return internal::CriterionOverGrid(linear, Effects{}, DelayEffect(), delays_s, num_threads);
 }
 
-DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options) {
+namespace {
+
+// The refinement EstimateDelay runs from the best grid point.
+RefineOptions DelayRefinement(const DelayOptions& options, double start_s) {
+  RefineOptions refine;
+  refine.effects = {DelayEffect()};
+  if (options.with_motor_lag) refine.effects.push_back(ParseEffectKind("motor_lag"));
+  refine.coarse_delay_search = false;
+  refine.initial.Set(DelayEffect(), start_s);
+  refine.num_threads = options.num_threads;
+  return refine;
+}
+
+}  // namespace
+
+int DelaySteps(const DelayOptions& options) { return 1 + RefineSteps(DelayRefinement(options, 0.0)); }
+
+DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options,
+                            const StepProgress& progress) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   DelayEstimate out;
   out.grid_s = internal::SearchGrid(options.min_s, options.max_s, options.step_s);
@@ -36,14 +54,13 @@ DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptio
   if (best == 0 || best + 1 == out.grid_s.size())
     out.warnings.push_back("the best delay lies at the edge of the searched range [" + std::to_string(options.min_s) +
                            ", " + std::to_string(options.max_s) + "] s; widen it");
-  RefineOptions refine;
+  const RefineOptions refine = DelayRefinement(options, out.grid_best_s);
   const EffectKind lag = ParseEffectKind("motor_lag");
-  refine.effects = {DelayEffect()};
-  if (options.with_motor_lag) refine.effects.push_back(lag);
-  refine.coarse_delay_search = false;
-  refine.initial.Set(DelayEffect(), out.grid_best_s);
-  refine.num_threads = options.num_threads;
-  out.refined = Refine(linear, refine);
+  const int total_steps = DelaySteps(options);
+  if (progress) progress(1, total_steps);
+  out.refined = Refine(linear, refine, [&](int done, int) {
+    if (progress) progress(1 + done, total_steps);
+  });
   out.delay_s = out.refined.effects.Scalar(DelayEffect());
   out.delay_std_s = out.refined.effects_std.Scalar(DelayEffect());
   out.motor_tau_s = out.refined.effects.Scalar(lag);

@@ -510,7 +510,23 @@ double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions
   return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
 }
 
-RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options) {
+namespace {
+
+constexpr int kMaxRefinePasses = 4;
+
+bool SearchesDelayGrid(const RefineOptions& options) {
+  return options.coarse_delay_search && std::any_of(options.effects.begin(), options.effects.end(),
+                                                    [](EffectKind kind) { return kind->info().grid_searched; });
+}
+
+}  // namespace
+
+int RefineSteps(const RefineOptions& options) {
+  const bool reselects = options.reselect_essential && !options.effects.empty();
+  return (SearchesDelayGrid(options) ? 1 : 0) + (reselects ? kMaxRefinePasses : 1);
+}
+
+RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options, const StepProgress& progress) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   for (EffectKind kind : options.effects)
     for (const ProcessedFlight& flight : linear.flights)
@@ -518,17 +534,25 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
         throw Error(flight.source + ": " + why);
   Effects start = options.initial;
   const double linear_criterion = EffectCriterion(linear, Effects{});
-  if (options.coarse_delay_search)
+  const int total_steps = RefineSteps(options);
+  int steps_done = 0;
+  auto step_done = [&]() {
+    if (progress) progress(++steps_done, total_steps);
+  };
+  if (SearchesDelayGrid(options)) {
     for (EffectKind kind : options.effects)
       if (kind->info().grid_searched) start.Set(kind, CoarseDelaySearch(linear, options, kind));
+    step_done();
+  }
   RefineResult result = SolveEffects(linear, linear.solution, start, options);
+  step_done();
   if (options.reselect_essential && !options.effects.empty()) {
     // The TLS weights and equation-error variances of the linear step were fitted to the residual of
     // the uncorrected rows (a delay inflates the yaw equation's error, say), and its essential set
     // to their precision. Re-run the TLS, weights and selection included, on the rows corrected by
     // the estimated effects, and refine again from there, until the effects settle.
     Effects previous = result.effects;
-    for (int pass = 2; pass <= 4; ++pass) {
+    for (int pass = 2; pass <= kMaxRefinePasses; ++pass) {
       IdentificationResult restarted = linear;
       restarted.system.w = SystemRowsWithEffects(linear, result.effects);
       TlsSolution reselected = SolveIdim(restarted.system, linear.options.tls);
@@ -539,6 +563,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       RefineResult candidate = SolveEffects(restarted, reselected, result.effects, next);
       candidate.reselected = reselected;
       result = std::move(candidate);
+      step_done();
       // Settled when no effect coordinate moved by more than a tenth of its std (without a
       // covariance: by more than the effect's settle tolerance).
       bool settled = true;
@@ -555,6 +580,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       previous = result.effects;
     }
   }
+  if (progress && steps_done < total_steps) progress(total_steps, total_steps);
   // Estimates on a bound are not estimates.
   result.on_bound = EffectsOnBound(result, options);
   for (EffectKind kind : result.on_bound)

@@ -39,9 +39,10 @@ Progress::~Progress() { Finish(); }
 
 void Progress::Update(int64_t done) {
   if (!enabled_) return;
-  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
-  // Another thread is drawing: this update is dropped, the next one will show the count.
-  if (!lock.owns_lock() || finished_) return;
+  // A blocking lock: a step-wise count (a refinement's passes) must not lose an update to the ticker
+  // drawing at that moment; a draw is one short write.
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (finished_) return;
   last_done_ = std::max(last_done_, done);
   const auto now = std::chrono::steady_clock::now();
   if (now - last_draw_ < kMinRedrawInterval) return;

@@ -117,6 +117,31 @@ TEST(RefineTest, AllEffectsOffReturnsTls) {
   }
 }
 
+// Progress counts the coarse delay search and every Ceres pass, in order, and ends on its total
+// whether the passes settle early or not.
+TEST(RefineTest, ProgressCountsTheSearchAndEachPassToItsTotal) {
+  Effects truth;
+  truth.Set("delay_s", 0.015);
+  const IdentificationResult linear = IdentifySimulated("B", 20.0, 5, truth);
+  RefineOptions options;
+  options.effects = {ParseEffectKind("delay")};
+  EXPECT_EQ(RefineSteps(options), 5);  // search + at most four passes
+  std::vector<std::pair<int, int>> calls;
+  const RefineResult refined = Refine(linear, options, [&](int done, int total) { calls.emplace_back(done, total); });
+  ASSERT_GE(calls.size(), 3u);  // the search, the first pass, at least one re-selection pass
+  for (size_t k = 0; k < calls.size(); ++k) {
+    EXPECT_EQ(calls[k].second, 5);
+    if (k > 0) {
+      EXPECT_GT(calls[k].first, calls[k - 1].first);
+    }
+  }
+  EXPECT_EQ(calls.back().first, 5);
+  EXPECT_NEAR(refined.effects.Scalar(ParseEffectKind("delay")), 0.015, 1e-3);
+  options.coarse_delay_search = false;
+  options.reselect_essential = false;
+  EXPECT_EQ(RefineSteps(options), 1);
+}
+
 // An attenuation the data do not have: a flight with an IMU lever arm the model lacks (30, -20,
 // 20) mm, refined with delay and motor lag only. The TLS criterion pays the lever arm's moment
 // error with a lead-lag pair 2.3-3.9 std from zero (seeds 1, 3, 4: -12.6 / 12.6 ms, -8.5 / 8.9 ms,

@@ -37,7 +37,10 @@ struct DelayEstimate {
 // The effect this estimates (the registry's `delay`).
 EffectKind DelayEffect();
 
-DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options);
+// Progress steps of EstimateDelay: the global search, then the refinement's (RefineSteps).
+int DelaySteps(const DelayOptions& options);
+DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptions& options,
+                            const StepProgress& progress = {});
 
 // The TLS criterion at each delay (threads split the grid).
 std::vector<double> DelayCriterionCurve(const IdentificationResult& linear, const std::vector<double>& delays_s,

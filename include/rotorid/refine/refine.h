@@ -93,7 +93,14 @@ struct RefineResult {
   std::vector<std::string> warnings;
 };
 
-RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options);
+// Progress of long work: `done` of `total` steps, called from the calling thread after each step.
+using StepProgress = std::function<void(int done, int total)>;
+
+// Steps Refine reports: the coarse delay search when it runs, then each Ceres pass (at most four
+// with the re-selection); a refinement that settles early jumps to the total.
+int RefineSteps(const RefineOptions& options);
+RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options,
+                    const StepProgress& progress = {});
 
 // The coarse global search Refine starts a grid-searched effect from (options.delay_search_*, the
 // other effects at options.initial): the grid value with the smallest TLS criterion.
