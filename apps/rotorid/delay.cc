@@ -45,25 +45,15 @@ Command AddDelayCommand(CLI::App& root) {
     const DelayEstimate estimate = EstimateDelay(linear, options->delay);
     progress.Finish();
     for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
-    nlohmann::json curve = nlohmann::json::array();
-    for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
-    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
-                             {"command", "delay"},
-                             {"settings",
-                              {{"observation", ObservationOptionsJson(identify.observation)},
-                               {"tls", TlsOptionsJson(identify.tls)},
-                               {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
-                               {"with_motor_lag", options->delay.with_motor_lag}}},
-                             {"delay_s", estimate.delay_s},
-                             {"delay_std_s", estimate.delay_std_s},
-                             {"grid_best_s", estimate.grid_best_s},
-                             {"motor_tau_s", estimate.motor_tau_s},
-                             {"motor_tau_std_s", estimate.motor_tau_std_s},
-                             {"criterion_curve", curve},
-                             {"linear", LinearJson(linear)},
-                             {"refined", RefinedJson(linear, estimate.refined)},
-                             {"warnings", estimate.warnings},
-                             {"checks", ChecksJson(checks)}};
+    nlohmann::json report = DelayJson(linear, estimate);
+    report["rotorid_version"] = kRotoridVersion;
+    report["command"] = "delay";
+    report["settings"] = {{"observation", ObservationOptionsJson(identify.observation)},
+                          {"tls", TlsOptionsJson(identify.tls)},
+                          {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
+                          {"with_motor_lag", options->delay.with_motor_lag}};
+    report["linear"] = LinearJson(linear);
+    report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     const std::string report_path = WriteCommandReport(
