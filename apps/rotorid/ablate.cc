@@ -76,20 +76,24 @@ Command AddAblateCommand(CLI::App& root) {
     for (const AblationEntry& e : ablation.entries)
       for (Check& c : CheckRefinement(linear, e.result, SubsetName(e.effects)))
         if (c.status != CheckStatus::kOk) checks.push_back(std::move(c));
-    nlohmann::json report = {
-        {"rotorid_version", kRotoridVersion},
-        {"command", "ablate"},
-        {"settings",
-         {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
-        {"effective_samples", ablation.effective_samples},
-        {"linear", LinearJson(linear)},
-        {"ablation", AblationJson(ablation)},
-        {"checks", ChecksJson(checks)}};
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
+                                     {"tls", TlsOptionsJson(identify.tls)}};
+    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                             {"command", "ablate"},
+                             {"settings", settings},
+                             {"effective_samples", ablation.effective_samples},
+                             {"linear", LinearJson(linear)},
+                             {"ablation", AblationJson(ablation)},
+                             {"checks", ChecksJson(checks)}};
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    const std::string report_path =
-        WriteCommandReport(options->flights, "rotorid ablate", report, ReportFlights(linear.flights, false),
-                           AblationParameterSets(linear, ablation));
+    ReportInput input = CommandReportInput("ablate", identify.observation, training, &validation, settings);
+    input.linear = &linear;
+    input.ablation = &ablation;
+    input.checks = checks;
+    input.flights = ReportFlights(linear.flights, false);
+    input.parameter_sets = AblationParameterSets(linear, ablation);
+    const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid ablate: " << ablation.entries.size() << " subsets of " << options->effects << "\n";
       std::cout << std::left << std::setw(46) << "effects" << std::right << std::setw(4) << "k" << std::setw(11)
