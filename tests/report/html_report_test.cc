@@ -429,6 +429,43 @@ TEST_F(HtmlReportTest, DiagnoseReportGivesTheVerdictFirstAndTablesEqualToTheJson
   EXPECT_EQ(CountOccurrences(ReadFile(dir_ + "/fig_wrench_2.svg"), shade), 0);
 }
 
+// As `rotorid validate --params refine.json --report` writes it: the saved parameter sets, read
+// back from the writers' JSON, applied to other flights.
+TEST_F(HtmlReportTest, ValidateReportShowsTheSavedParametersOnTheGivenFlights) {
+  const json saved = {{"linear", LinearJson(*linear_)}, {"refined", RefinedJson(*linear_, *refined_)}};
+  ReportInput input;
+  input.title = "rotorid validate";
+  input.command = "validate";
+  input.observation = ObservationOptions{};
+  input.flights = ReportFlights(*held_out_, true);
+  input.parameter_sets = ParameterSetsFromReport(saved, "refine.json");
+  ASSERT_EQ(input.parameter_sets.size(), 2u);
+  const ParameterSet& refined = input.parameter_sets[1];
+  EXPECT_EQ(refined.label, "refined");
+  EXPECT_NEAR(refined.effects.Get(ParseEffectKind("delay"))[0], refined_->effects.Get(ParseEffectKind("delay"))[0],
+              1e-12);
+  const std::vector<std::optional<double>> combined =
+      RelativeErrorWithEffects(*held_out_, refined.values, refined.effects);
+  input.relative_errors = {{"given flights", "refined parameters of refine.json", combined}};
+  const std::string html = Write(input);
+  // The refined values (the second set's value column) are the saved ones.
+  ExpectParameterTableMatches(TableCells(html, "parameters_table"), saved["refined"]["parameters"], 5);
+  EXPECT_EQ(TableCells(html, "table3_flights").size(), 2u);  // one held-out flight, two sets
+  const auto given = TableCells(html, "table3_combined");
+  ASSERT_EQ(given.size(), 1u);
+  EXPECT_EQ(given[0][0], "given flights");
+  EXPECT_NEAR(CellNumber(given[0][3]), *combined[3], 0.0051);
+  // A saved report without a parameter's value names the file.
+  json broken = saved;
+  broken["linear"]["parameters"]["kt"].erase("value");
+  try {
+    ParameterSetsFromReport(broken, "refine.json");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("refine.json"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(HtmlReportTest, AResultTheCommandDidNotGiveIsNotShown) {
   std::string html = Write(IdentifyInput());
   for (const char* id : {"id=\"diagnosis\"", "id=\"effects_table\"", "id=\"ablation\"", "id=\"checks\""})
