@@ -1,7 +1,6 @@
 #include "report/diagnosis_section.h"
 
 #include <algorithm>
-#include <cmath>
 #include <optional>
 
 #include "report/html_text.h"
