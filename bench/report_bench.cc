@@ -35,7 +35,7 @@ struct Fixture {
   std::unique_ptr<IdentificationResult> linear;
   std::unique_ptr<RefineResult> refined;
   ProcessedFlight held_out;
-  nlohmann::json identify_report, refine_report;
+  RefineOptions refine;
 };
 
 const Fixture& GetFixture() {
@@ -50,24 +50,13 @@ const Fixture& GetFixture() {
     f->log_90s = testing::SyntheticFlight(vehicle, testing::PaperParametersA(), options, "synthetic_90s.csv");
     f->flights = {{vehicle, f->log_90s, 1.0}};
     f->linear = std::make_unique<IdentificationResult>(Identify(f->flights, f->identify));
-    RefineOptions refine;
-    refine.effects = {ParseEffectKind("delay")};
-    f->refined = std::make_unique<RefineResult>(Refine(*f->linear, refine));
+    f->refine.effects = {ParseEffectKind("delay")};
+    f->refined = std::make_unique<RefineResult>(Refine(*f->linear, f->refine));
     options.duration_s = 60.0;
     options.seed = 7;
     f->held_out =
         ProcessFlight(testing::SyntheticFlight(vehicle, testing::PaperParametersA(), options, "held_out_60s.csv"),
                       vehicle, 1.0, f->identify.observation);
-    const nlohmann::json settings = {{"observation", ObservationOptionsJson(f->identify.observation)},
-                                     {"tls", TlsOptionsJson(f->identify.tls)}};
-    f->identify_report = {{"rotorid_version", kRotoridVersion},
-                          {"command", "identify"},
-                          {"settings", settings},
-                          {"linear", LinearJson(*f->linear)}};
-    f->refine_report = f->identify_report;
-    f->refine_report["command"] = "refine";
-    f->refine_report["settings"]["refine"] = RefineOptionsJson(refine);
-    f->refine_report["refined"] = RefinedJson(*f->linear, *f->refined);
     return f;
   }();
   return *fixture;
@@ -77,7 +66,12 @@ const Fixture& GetFixture() {
 ReportInput IdentifyReportInput(const Fixture& f) {
   ReportInput input;
   input.title = "rotorid identify (benchmark)";
-  input.report = f.identify_report;
+  input.command = "identify";
+  input.rotorid_version = kRotoridVersion;
+  input.observation = f.identify.observation;
+  input.settings = SettingsRows(
+      {{"observation", ObservationOptionsJson(f.identify.observation)}, {"tls", TlsOptionsJson(f.identify.tls)}});
+  input.linear = f.linear.get();
   input.flights = {{"synthetic 90 s flight", &f.linear->flights[0], false}};
   input.parameter_sets = {{"linear", NamedParameters(f.linear->system, f.linear->solution.chi), Effects()}};
   return input;
@@ -87,7 +81,11 @@ ReportInput IdentifyReportInput(const Fixture& f) {
 ReportInput RefineReportInput(const Fixture& f) {
   ReportInput input = IdentifyReportInput(f);
   input.title = "rotorid refine (benchmark)";
-  input.report = f.refine_report;
+  input.command = "refine";
+  input.settings = SettingsRows({{"observation", ObservationOptionsJson(f.identify.observation)},
+                                 {"tls", TlsOptionsJson(f.identify.tls)},
+                                 {"refine", RefineOptionsJson(f.refine)}});
+  input.refined = f.refined.get();
   input.flights.push_back({"synthetic 60 s flight", &f.held_out, true});
   input.parameter_sets.push_back(
       {"refined", NamedParameters(f.linear->system, f.refined->refined.chi), f.refined->effects});

@@ -72,39 +72,28 @@ Command AddAblateCommand(CLI::App& root) {
                                            [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
 
-    nlohmann::json rows = nlohmann::json::array();
-    for (const AblationEntry& e : ablation.entries) {
-      nlohmann::json names = nlohmann::json::array();
-      for (EffectKind k : e.effects) names.push_back(EffectName(k));
-      nlohmann::json row = {{"effects", names},
-                            {"num_parameters", e.num_parameters},
-                            {"aic", e.aic},
-                            {"bic", e.bic},
-                            {"criterion", e.result.refined_criterion},
-                            {"relative_error_pct", ComponentsJson(e.relative_error_pct)},
-                            {"kt", e.result.refined.chi[0]},
-                            {"kd", e.result.refined.chi[1]},
-                            {"effects_values", EffectsJson(e.result.effects, e.result.effects_std, e.effects)}};
-      if (!held_out.empty()) row["held_out_relative_error_pct"] = ComponentsJson(e.held_out_relative_error_pct);
-      rows.push_back(row);
-      // Each subset's failed checks (the passing ones would repeat for every subset).
+    // Each subset's failed checks (the passing ones would repeat for every subset).
+    for (const AblationEntry& e : ablation.entries)
       for (Check& c : CheckRefinement(linear, e.result, SubsetName(e.effects)))
         if (c.status != CheckStatus::kOk) checks.push_back(std::move(c));
-    }
-    nlohmann::json report = {
-        {"rotorid_version", kRotoridVersion},
-        {"command", "ablate"},
-        {"settings",
-         {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
-        {"effective_samples", ablation.effective_samples},
-        {"linear", LinearJson(linear)},
-        {"ablation", rows},
-        {"checks", ChecksJson(checks)}};
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
+                                     {"tls", TlsOptionsJson(identify.tls)}};
+    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                             {"command", "ablate"},
+                             {"settings", settings},
+                             {"effective_samples", ablation.effective_samples},
+                             {"linear", LinearJson(linear)},
+                             {"ablation", AblationJson(ablation)},
+                             {"checks", ChecksJson(checks)}};
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    const std::string report_path =
-        WriteCommandReport(options->flights, "rotorid ablate", report, ReportFlights(linear.flights, false),
-                           AblationParameterSets(linear, ablation));
+    ReportInput input = CommandReportInput("ablate", identify.observation, training, &validation, settings);
+    input.linear = &linear;
+    input.ablation = &ablation;
+    input.checks = checks;
+    input.flights = ReportFlights(linear.flights, false);
+    input.parameter_sets = AblationParameterSets(linear, ablation);
+    const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid ablate: " << ablation.entries.size() << " subsets of " << options->effects << "\n";
       std::cout << std::left << std::setw(46) << "effects" << std::right << std::setw(4) << "k" << std::setw(11)

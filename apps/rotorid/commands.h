@@ -87,9 +87,13 @@ void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training,
 void AddConfigOption(CLI::App* root);
 nlohmann::json ConfigJson(const CLI::App& app);
 
+// The HTML report's parts every command has: title "rotorid COMMAND", version, the signal
+// processing, what was read and the run settings (`settings`, the JSON report's "settings").
+ReportInput CommandReportInput(const std::string& command, const ObservationOptions& observation,
+                               const LoadedFlights& training, const LoadedFlights* held_out,
+                               const nlohmann::json& settings);
 // Writes the HTML report of --report (when given) and returns its path ("" without --report).
-std::string WriteCommandReport(const FlightOptions& options, const std::string& title, const nlohmann::json& report,
-                               std::vector<ReportFlight> flights, std::vector<ParameterSet> parameter_sets);
+std::string WriteCommandReport(const FlightOptions& options, const ReportInput& input);
 
 // A mistake on the command line (exit code 2, INTERFACE.md 4). rotorid::Error thrown while a
 // command still validates its options counts as one too: see MarkOptionsValidated.

@@ -8,6 +8,7 @@
 #include "rotorid/refine/delay.h"
 #include "rotorid/refine/refine_checks.h"
 #include "rotorid/report/checks_json.h"
+#include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/progress.h"
 #include "rotorid/report/refine_json.h"
@@ -46,31 +47,28 @@ Command AddDelayCommand(CLI::App& root) {
         EstimateDelay(linear, options->delay, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
-    nlohmann::json curve = nlohmann::json::array();
-    for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
-    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
-                             {"command", "delay"},
-                             {"settings",
-                              {{"observation", ObservationOptionsJson(identify.observation)},
-                               {"tls", TlsOptionsJson(identify.tls)},
-                               {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
-                               {"with_motor_lag", options->delay.with_motor_lag}}},
-                             {"delay_s", estimate.delay_s},
-                             {"delay_std_s", estimate.delay_std_s},
-                             {"grid_best_s", estimate.grid_best_s},
-                             {"motor_tau_s", estimate.motor_tau_s},
-                             {"motor_tau_std_s", estimate.motor_tau_std_s},
-                             {"criterion_curve", curve},
-                             {"linear", LinearJson(linear)},
-                             {"refined", RefinedJson(linear, estimate.refined)},
-                             {"warnings", estimate.warnings},
-                             {"checks", ChecksJson(checks)}};
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
+                                     {"tls", TlsOptionsJson(identify.tls)},
+                                     {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
+                                     {"with_motor_lag", options->delay.with_motor_lag}};
+    nlohmann::json report = DelayJson(linear, estimate);
+    report["rotorid_version"] = kRotoridVersion;
+    report["command"] = "delay";
+    report["settings"] = settings;
+    report["linear"] = LinearJson(linear);
+    report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    const std::string report_path = WriteCommandReport(
-        options->flights, "rotorid delay", report, ReportFlights(linear.flights, false),
-        {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
-         {"with the delay", NamedParameters(linear.system, estimate.refined.refined.chi), estimate.refined.effects}});
+    ReportInput input = CommandReportInput("delay", identify.observation, loaded, nullptr, settings);
+    input.linear = &linear;
+    input.refined = &estimate.refined;
+    input.warnings = estimate.warnings;
+    input.checks = checks;
+    input.flights = ReportFlights(linear.flights, false);
+    input.parameter_sets = {
+        {"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
+        {"with the delay", NamedParameters(linear.system, estimate.refined.refined.chi), estimate.refined.effects}};
+    const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid delay: " << 1000 * estimate.delay_s << " ms +- " << 1000 * estimate.delay_std_s
                 << " ms (global search best " << 1000 * estimate.grid_best_s << " ms over ["

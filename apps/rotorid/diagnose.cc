@@ -6,8 +6,8 @@
 #include "rotorid/core/error.h"
 #include "rotorid/diagnosis/diagnosis.h"
 #include "rotorid/diagnosis/diagnosis_checks.h"
-#include "rotorid/report/checks_json.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
+#include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/progress.h"
@@ -77,29 +77,26 @@ Command AddDiagnoseCommand(CLI::App& root) {
       if (std::find(configs.begin(), configs.end(), f.vehicle.name) == configs.end()) configs.push_back(f.vehicle.name);
     for (Check& c : CheckDiagnosis(result, configs)) checks.push_back(std::move(c));
 
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
+                                     {"tls", TlsOptionsJson(diagnosis.identify.tls)},
+                                     {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
     nlohmann::json report = DiagnosisJson(result);
     report["rotorid_version"] = kRotoridVersion;
     report["command"] = "diagnose";
-    report["settings"] = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
-                          {"tls", TlsOptionsJson(diagnosis.identify.tls)},
-                          {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
+    report["settings"] = settings;
     report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    std::string report_path;
-    if (!options->flights.report_dir.empty()) {
-      ReportInput input;
-      input.title = "rotorid diagnose";
-      input.report = report;
-      input.flights = ReportFlights(flights, /*held_out=*/false);
-      for (ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) input.flights.push_back(f);
-      input.parameter_sets = {{"linear", result.linear_parameters, Effects()}};
-      if (!result.selected.empty())
-        input.parameter_sets.push_back({"with selected effects", result.final_parameters, result.final_effects});
-      ReportOptions report_options;
-      report_options.print_warnings = !options->flights.quiet;
-      report_path = WriteHtmlReport(options->flights.report_dir, input, report_options).html_path;
-    }
+    ReportInput input =
+        CommandReportInput("diagnose", diagnosis.identify.observation, training, &validation, settings);
+    input.diagnosis = &result;
+    input.checks = checks;
+    input.flights = ReportFlights(flights, /*held_out=*/false);
+    for (const ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) input.flights.push_back(f);
+    input.parameter_sets = {{"linear", result.linear_parameters, Effects()}};
+    if (!result.selected.empty())
+      input.parameter_sets.push_back({"with selected effects", result.final_parameters, result.final_effects});
+    const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid diagnose: " << TlsMethodName(diagnosis.identify.tls.method) << " TLS, candidates "
                 << options->effects << "; " << result.refinements << " refinements in " << result.seconds << " s\n";

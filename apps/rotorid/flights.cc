@@ -8,6 +8,7 @@
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/report/input_json.h"
+#include "rotorid/report/json.h"
 
 namespace rotorid::cli {
 
@@ -167,14 +168,22 @@ void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training,
   if (const nlohmann::json config = ConfigJson(app); !config.is_null()) (*report)["config"] = config;
 }
 
-std::string WriteCommandReport(const FlightOptions& options, const std::string& title, const nlohmann::json& report,
-                               std::vector<ReportFlight> flights, std::vector<ParameterSet> parameter_sets) {
-  if (options.report_dir.empty()) return {};
+ReportInput CommandReportInput(const std::string& command, const ObservationOptions& observation,
+                               const LoadedFlights& training, const LoadedFlights* held_out,
+                               const nlohmann::json& settings) {
   ReportInput input;
-  input.title = title;
-  input.report = report;
-  input.flights = std::move(flights);
-  input.parameter_sets = std::move(parameter_sets);
+  input.title = "rotorid " + command;
+  input.command = command;
+  input.rotorid_version = kRotoridVersion;
+  input.observation = observation;
+  input.inputs = training.inputs;
+  if (held_out) input.validate_inputs = held_out->inputs;
+  input.settings = SettingsRows(settings);
+  return input;
+}
+
+std::string WriteCommandReport(const FlightOptions& options, const ReportInput& input) {
+  if (options.report_dir.empty()) return {};
   ReportOptions report_options;
   report_options.print_warnings = !options.quiet;
   return WriteHtmlReport(options.report_dir, input, report_options).html_path;

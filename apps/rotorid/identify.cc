@@ -33,18 +33,21 @@ Command AddIdentifyCommand(CLI::App& root) {
     std::vector<Check> checks;
     const IdentificationResult result = IdentifyWithChecks(flights, identify, &checks);
     progress.Finish();
-    nlohmann::json report = {
-        {"rotorid_version", kRotoridVersion},
-        {"command", "identify"},
-        {"settings",
-         {{"observation", ObservationOptionsJson(identify.observation)}, {"tls", TlsOptionsJson(identify.tls)}}},
-        {"linear", LinearJson(result)},
-        {"checks", ChecksJson(checks)}};
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
+                                     {"tls", TlsOptionsJson(identify.tls)}};
+    nlohmann::json report = {{"rotorid_version", kRotoridVersion},
+                             {"command", "identify"},
+                             {"settings", settings},
+                             {"linear", LinearJson(result)},
+                             {"checks", ChecksJson(checks)}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    const std::string report_path =
-        WriteCommandReport(options->flights, "rotorid identify", report, ReportFlights(result.flights, false),
-                           {{"linear", NamedParameters(result.system, result.solution.chi), Effects()}});
+    ReportInput input = CommandReportInput("identify", identify.observation, loaded, nullptr, settings);
+    input.linear = &result;
+    input.checks = checks;
+    input.flights = ReportFlights(result.flights, false);
+    input.parameter_sets = {{"linear", NamedParameters(result.system, result.solution.chi), Effects()}};
+    const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "
                 << DataSourceName(identify.observation.source) << " data, " << flights.size() << " flight(s), "

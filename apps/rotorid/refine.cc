@@ -108,12 +108,12 @@ Command AddRefineCommand(CLI::App& root) {
     progress.Finish();
     for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
 
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
+                                     {"tls", TlsOptionsJson(identify.tls)},
+                                     {"refine", RefineOptionsJson(refine)}};
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
                              {"command", "refine"},
-                             {"settings",
-                              {{"observation", ObservationOptionsJson(identify.observation)},
-                               {"tls", TlsOptionsJson(identify.tls)},
-                               {"refine", RefineOptionsJson(refine)}}},
+                             {"settings", settings},
                              {"linear", LinearJson(linear)},
                              {"refined", RefinedJson(linear, refined)}};
     std::vector<std::optional<double>> held_out_linear, held_out_refined;
@@ -131,19 +131,18 @@ Command AddRefineCommand(CLI::App& root) {
     report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    if (!options->flights.report_dir.empty()) {
-      ReportInput input;
-      input.title = "rotorid refine";
-      input.report = report;
-      input.flights = ReportFlights(linear.flights, /*held_out=*/false);
-      const std::vector<ReportFlight> held_out_flights = ReportFlights(held_out, /*held_out=*/true);
-      input.flights.insert(input.flights.end(), held_out_flights.begin(), held_out_flights.end());
-      input.parameter_sets = {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
-                              {"refined", NamedParameters(linear.system, refined.refined.chi), refined.effects}};
-      ReportOptions report_options;
-      report_options.print_warnings = !options->flights.quiet;
-      WriteHtmlReport(options->flights.report_dir, input, report_options);
-    }
+    ReportInput input = CommandReportInput("refine", identify.observation, training, &validation, settings);
+    input.linear = &linear;
+    input.refined = &refined;
+    if (!options->flights.validate_log_paths.empty())
+      input.relative_errors = {{"held-out flights", "linear", held_out_linear},
+                               {"held-out flights", "refined", held_out_refined}};
+    input.checks = checks;
+    input.flights = ReportFlights(linear.flights, /*held_out=*/false);
+    for (const ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) input.flights.push_back(f);
+    input.parameter_sets = {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
+                            {"refined", NamedParameters(linear.system, refined.refined.chi), refined.effects}};
+    WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid refine: " << TlsMethodName(identify.tls.method) << " TLS, then Ceres with effects "
                 << (options->effects.empty() ? "none" : options->effects) << " (" << refined.solver.iterations

@@ -58,33 +58,27 @@ Command AddValidateCommand(CLI::App& root) {
       fits.back().relative_error_pct = RelativeErrorWithEffects({f}, values, effects);
       per_flight.push_back(FlightFitJson(fits.back()));
     }
+    const nlohmann::json settings = {{"observation", ObservationOptionsJson(observation)}};
+    const std::string block = refined ? "refined" : "linear";
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
                              {"command", "validate"},
                              {"params", options->params_path},
-                             {"block", refined ? "refined" : "linear"},
-                             {"settings", {{"observation", ObservationOptionsJson(observation)}}},
+                             {"block", block},
+                             {"settings", settings},
                              {"relative_error_pct", ComponentsJson(combined)},
                              {"flights", per_flight}};
     AddCommonReportSections(*app, loaded, nullptr, &report);
     for (Check& c : CheckRelativeError(combined, "validation", /*held_out=*/true)) checks.push_back(std::move(c));
     report["checks"] = ChecksJson(checks);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    std::string report_path;
-    if (!options->flights.report_dir.empty()) {
-      ReportInput input;
-      input.title = "rotorid validate";
-      input.report = report;
-      // The saved parameters (and the refined effects) go into the report's parameter table.
-      for (const char* block : {"linear", "refined"})
-        for (const char* key : {"parameters", "effects"})
-          if (params.contains(block) && params[block].is_object() && params[block].contains(key))
-            input.report[block][key] = params[block][key];
-      input.flights = ReportFlights(flights, /*held_out=*/true);
-      input.parameter_sets = ParameterSetsFromReport(params);
-      ReportOptions report_options;
-      report_options.print_warnings = !options->flights.quiet;
-      report_path = WriteHtmlReport(options->flights.report_dir, input, report_options).html_path;
-    }
+    ReportInput input = CommandReportInput("validate", observation, loaded, nullptr, settings);
+    input.settings.emplace_back("params", options->params_path);
+    input.relative_errors = {{"given flights", block + " parameters of " + options->params_path, combined}};
+    input.checks = checks;
+    input.flights = ReportFlights(flights, /*held_out=*/true);
+    // The saved parameters (and the refined effects) are drawn beside each other.
+    input.parameter_sets = ParameterSetsFromReport(params, options->params_path);
+    const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid validate: parameters of " << options->params_path << " on " << flights.size()
                 << " flight(s)\n";

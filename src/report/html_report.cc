@@ -15,11 +15,12 @@
 #include "report/gnuplot.h"
 #include "report/html_text.h"
 #include "report/report_figures.h"
-#include "report/report_reader.h"
 #include "report/spectrum.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/report/input_json.h"
+#include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 #include "rotorid/report/wrench_split.h"
 
@@ -30,7 +31,6 @@ using internal::ComponentHeader;
 using internal::FigureSpec;
 using internal::General;
 using internal::Html;
-using internal::JsonNode;
 using internal::Pct;
 using internal::Sci;
 using nlohmann::json;
@@ -59,13 +59,23 @@ bool ParameterLess(const std::string& a, const std::string& b) {
 }
 
 // Dotted keys of every scalar (or array of scalars) below `j`: the run settings are shown as they
-// were recorded, whatever options a command adds.
+// are recorded, whatever options a command adds.
 void Flatten(const json& j, const std::string& prefix, std::vector<std::pair<std::string, std::string>>* out) {
   if (j.is_object()) {
     for (const auto& [key, value] : j.items()) Flatten(value, prefix.empty() ? key : prefix + "." + key, out);
   } else {
     out->emplace_back(prefix, j.is_string() ? j.get<std::string>() : j.dump());
   }
+}
+
+// A number of a result as its JSON shows it: nothing (a dash) when not finite.
+std::optional<double> Finite(double v) { return std::isfinite(v) ? std::optional(v) : std::nullopt; }
+
+// "delay + motor_lag", or "none".
+std::string AblationLabel(const AblationEntry& entry) {
+  std::string label;
+  for (EffectKind kind : entry.effects) label += (label.empty() ? "" : " + ") + std::string(EffectName(kind));
+  return label.empty() ? "none" : label;
 }
 
 // One cell of the input.flights[] table: numbers with 4 digits, lists joined, an object or a list of
@@ -187,11 +197,7 @@ code { font: 12.5px/1.4 ui-monospace, SFMono-Regular, Menlo, Consolas, monospace
 class ReportBuilder {
  public:
   ReportBuilder(const std::string& dir, const ReportInput& input, const ReportOptions& options)
-      : dir_(dir),
-        input_(input),
-        options_(options),
-        report_(input.report.is_object() ? input.report : json::object()),
-        root_(report_, "") {}
+      : dir_(dir), input_(input), options_(options) {}
 
   ReportSummary Build();
 
@@ -199,12 +205,11 @@ class ReportBuilder {
   // Data.
   void ComputeSplits();
   void CollectParameterBlocks();
-  std::optional<JsonNode> ParameterBlockJson(const std::string& label) const;
   void CollectMarks();
   // Figures.
   std::vector<FigureSpec> FigureSpecs();
   std::optional<FigureSpec> ParameterFigureSpec() const;
-  static std::string AblationLabel(const JsonNode& entry);
+  std::optional<FigureSpec> AblationFigureSpec() const;
   void RenderFigures(std::vector<FigureSpec> specs);
   // Page.
   std::string Page() const;
@@ -229,17 +234,23 @@ class ReportBuilder {
   const std::string dir_;
   const ReportInput& input_;
   const ReportOptions& options_;
-  const json report_;
-  const JsonNode root_;  // report_, read strictly
 
   std::string gnuplot_path_;
   // splits_[flight][set]
   std::vector<std::vector<std::optional<WrenchSplit>>> splits_;
-  // Parameter blocks of the table: label and the JSON "parameters" object (may be null).
+  // Column groups of the parameter table: a parameter set, a TLS result with its statistics, or both.
   struct ParameterBlock {
     std::string label;
-    std::optional<JsonNode> parameters;  // the JSON block's "parameters", when there is one
+    const std::vector<std::string>* names = nullptr;  // of `solution`'s parameters
+    const TlsSolution* solution = nullptr;
     const ParameterSet* set = nullptr;
+    // The statistics of `name`, when the block has them.
+    std::optional<ParameterStatistics> Statistics(const std::string& name) const {
+      if (!solution) return std::nullopt;
+      const auto it = std::find(names->begin(), names->end(), name);
+      if (it == names->end()) return std::nullopt;
+      return ParameterStatisticsOf(*names, *solution, static_cast<size_t>(it - names->begin()));
+    }
   };
   std::vector<ParameterBlock> blocks_;
   std::string ParameterCells(const ParameterBlock& b, const std::string& name, std::optional<double>* value,
@@ -272,36 +283,36 @@ void ReportBuilder::ComputeSplits() {
   }
 }
 
-// The "linear" and "refined" blocks of identify/refine reports; other parameter sets (the
-// diagnosis's) have values only.
-std::optional<JsonNode> ReportBuilder::ParameterBlockJson(const std::string& label) const {
-  if ((label != "linear" && label != "refined") || !root_.Has(label)) return std::nullopt;
-  return root_[label]["parameters"];
-}
-
+// The TLS results carry statistics: the parameter set of the same label ("linear", "refined") shows
+// them, and one that no set stands for is a column group of its own (delay's "refined" beside its
+// "with the delay" set).
 void ReportBuilder::CollectParameterBlocks() {
+  std::vector<std::pair<std::string, const TlsSolution*>> solutions;
+  if (input_.linear) solutions.emplace_back("linear", &input_.linear->solution);
+  if (input_.refined) solutions.emplace_back("refined", &input_.refined->refined);
+  const std::vector<std::string>* names = input_.linear ? &input_.linear->system.parameter_names : nullptr;
+  auto solution_of = [&](const std::string& label) -> const TlsSolution* {
+    for (const auto& [solution_label, solution] : solutions)
+      if (solution_label == label) return solution;
+    return nullptr;
+  };
   std::set<std::string> seen;
   for (const ParameterSet& set : input_.parameter_sets)
-    if (seen.insert(set.label).second) blocks_.push_back({set.label, ParameterBlockJson(set.label), &set});
-  // Blocks of the JSON that no parameter set stands for (e.g. a refine report given to validate).
-  for (const char* label : {"linear", "refined"})
-    if (const std::optional<JsonNode> parameters = ParameterBlockJson(label); parameters && seen.insert(label).second)
-      blocks_.push_back({label, parameters, nullptr});
+    if (seen.insert(set.label).second) blocks_.push_back({set.label, names, solution_of(set.label), &set});
+  for (const auto& [label, solution] : solutions)
+    if (seen.insert(label).second) blocks_.push_back({label, names, solution, nullptr});
 }
 
 // The diagnosis's worst stretches, shaded on the time axes of the flight they name (by its log
 // path), and the band holding most of the residual, shaded on the spectra.
 void ReportBuilder::CollectMarks() {
   marks_.assign(input_.flights.size(), {});
-  if (!internal::HasDiagnosis(root_)) return;
-  for (const JsonNode& stretch : root_["where"]["worst_stretches"].Elements()) {
-    const std::string flight = stretch["flight"].String();
+  if (!input_.diagnosis) return;
+  for (const FlightStretch& stretch : input_.diagnosis->where.worst_stretches)
     for (size_t f = 0; f < input_.flights.size(); ++f)
-      if (input_.flights[f].flight->source == flight)
-        marks_[f].push_back(
-            {stretch["start_s"].Number(), stretch["end_s"].Number(), stretch["dominant_component"].String()});
-  }
-  bands_hz_ = internal::WorstBands(root_);
+      if (input_.flights[f].flight->source == stretch.flight)
+        marks_[f].push_back({stretch.start_s, stretch.end_s, kWrenchComponentNames[stretch.dominant_component]});
+  bands_hz_ = internal::WorstBands(*input_.diagnosis);
 }
 
 std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
@@ -331,8 +342,7 @@ std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
   }
   // (b) Residual spectra, identification and held-out flights separately.
   const std::optional<double> cutoff =
-      root_.Has("settings") ? std::optional(root_["settings"]["observation"]["filter"]["cutoff_hz"].Number())
-                            : std::nullopt;
+      input_.observation ? std::optional(input_.observation->filter.cutoff_hz) : std::nullopt;
   for (const bool held_out : {false, true}) {
     const std::vector<size_t> group = FlightsOfGroup(held_out);
     if (group.empty()) continue;
@@ -386,49 +396,49 @@ std::vector<FigureSpec> ReportBuilder::FigureSpecs() {
         "low-pass cut-off (dashed) the signals were filtered away.";
     specs.push_back(std::move(spec));
   }
-  // (c) Parameters with error bars, from the JSON blocks that carry statistics.
+  // (c) Parameters with error bars, from the results that carry statistics.
   if (std::optional<FigureSpec> spec = ParameterFigureSpec()) specs.push_back(std::move(*spec));
-  // (d) Diagnosis and ablation, when the report carries them.
-  for (FigureSpec& spec : internal::DiagnosisFigures(root_)) specs.push_back(std::move(spec));
-  if (root_.Has("ablation")) {
-    std::vector<internal::AblationRow> table;
-    for (const JsonNode& entry : root_["ablation"].Elements())
-      table.push_back({AblationLabel(entry), entry["relative_error_pct"].Components(),
-                       entry.Has("held_out_relative_error_pct") ? entry["held_out_relative_error_pct"].Components()
-                                                                : std::vector<std::optional<double>>()});
-    if (!table.empty())
-      specs.push_back(internal::Titled(
-          internal::AblationFigure("fig_ablation", table), "Ablation",
-          "Relative error per component for each combination of effects, on the identification flights "
-          "and, when given, on held-out flights. An effect earns its place when it lowers the held-out "
-          "bars, not only the identification ones."));
-  }
+  // (d) Diagnosis and ablation, when the command has them.
+  if (input_.diagnosis)
+    for (FigureSpec& spec : internal::DiagnosisFigures(*input_.diagnosis)) specs.push_back(std::move(spec));
+  if (std::optional<FigureSpec> spec = AblationFigureSpec()) specs.push_back(std::move(*spec));
   return specs;
+}
+
+std::optional<FigureSpec> ReportBuilder::AblationFigureSpec() const {
+  if (!input_.ablation || input_.ablation->entries.empty()) return std::nullopt;
+  std::vector<internal::AblationRow> table;
+  for (const AblationEntry& entry : input_.ablation->entries)
+    table.push_back({AblationLabel(entry), entry.relative_error_pct, entry.held_out_relative_error_pct});
+  return internal::Titled(internal::AblationFigure("fig_ablation", table), "Ablation",
+                          "Relative error per component for each combination of effects, on the identification "
+                          "flights and, when given, on held-out flights. An effect earns its place when it lowers "
+                          "the held-out bars, not only the identification ones.");
 }
 
 std::optional<FigureSpec> ReportBuilder::ParameterFigureSpec() const {
   std::vector<std::string> labels;
-  std::vector<JsonNode> parameter_objects;
+  std::vector<const ParameterBlock*> with_statistics;
   for (const ParameterBlock& b : blocks_)
-    if (b.parameters) {
+    if (b.solution) {
       labels.push_back(b.label);
-      parameter_objects.push_back(*b.parameters);
+      with_statistics.push_back(&b);
     }
-  if (parameter_objects.empty()) return std::nullopt;
+  if (with_statistics.empty()) return std::nullopt;
   std::vector<std::string> names;
-  for (const auto& [name, entry] : parameter_objects[0].Items()) {
-    const std::optional<double> value = entry["value"].NumberOrNull();
-    if (entry["essential"].Bool() && value && *value != 0.0) names.push_back(name);
+  for (const std::string& name : *with_statistics[0]->names) {
+    const ParameterStatistics p = *with_statistics[0]->Statistics(name);
+    if (p.essential && std::isfinite(p.value) && p.value != 0.0) names.push_back(name);
   }
   std::sort(names.begin(), names.end(), ParameterLess);
   std::vector<internal::ParameterPoint> points;
   for (const std::string& name : names) {
     internal::ParameterPoint p;
     p.name = name;
-    for (const JsonNode& parameters : parameter_objects) {
-      const bool present = parameters.json().contains(name);
-      p.value.push_back(present ? parameters[name]["value"].NumberOrNull() : std::nullopt);
-      p.std.push_back(present ? parameters[name]["std"].NumberOrNull() : std::nullopt);
+    for (const ParameterBlock* b : with_statistics) {
+      const std::optional<ParameterStatistics> statistics = b->Statistics(name);
+      p.value.push_back(statistics ? Finite(statistics->value) : std::nullopt);
+      p.std.push_back(statistics ? Finite(statistics->std) : std::nullopt);
     }
     points.push_back(std::move(p));
   }
@@ -439,12 +449,6 @@ std::optional<FigureSpec> ReportBuilder::ParameterFigureSpec() const {
                  "divided by the same value so that every parameter shares one axis. A refined value outside the "
                  "linear error bar means the effects changed the estimate by more than its uncertainty.";
   return spec;
-}
-
-std::string ReportBuilder::AblationLabel(const JsonNode& entry) {
-  std::string label;
-  for (const JsonNode& e : entry["effects"].Elements()) label += (label.empty() ? "" : " + ") + e.String();
-  return label.empty() ? "none" : label;
 }
 
 namespace {
@@ -523,19 +527,17 @@ std::string ReportBuilder::FlightsSection() const {
 }
 
 std::string ReportBuilder::InputFlightsTable() const {
-  if (!root_.Has("input")) return "";
-  const JsonNode input = root_["input"];
-  // Identification flights, then the held-out ones when the command had any.
-  std::vector<std::pair<std::string, JsonNode>> flights;
-  for (const JsonNode& f : input["flights"].Elements()) flights.emplace_back("identification", f);
-  if (input.Has("validate_flights"))
-    for (const JsonNode& f : input["validate_flights"].Elements()) flights.emplace_back("held-out", f);
+  if (input_.inputs.empty() && input_.validate_inputs.empty()) return "";
+  // Identification flights, then the held-out ones; each as input.flights[] records it.
+  std::vector<std::pair<std::string, json>> flights;
+  for (const FlightInputSummary& f : input_.inputs) flights.emplace_back("identification", FlightInputJson(f));
+  for (const FlightInputSummary& f : input_.validate_inputs) flights.emplace_back("held-out", FlightInputJson(f));
   // The columns are what the command recorded per log (INTERFACE.md: file, format, span, rates,
   // rotor signal, columns or topics, segments).
   std::vector<std::string> keys;
   for (const auto& [role, f] : flights)
-    for (const auto& [key, value] : f.Items())
-      if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+    for (const auto& item : f.items())
+      if (std::find(keys.begin(), keys.end(), item.key()) == keys.end()) keys.push_back(item.key());
   std::string html =
       "<h3>What was read</h3>\n<div class=\"scroll\"><table id=\"input_flights\"><thead><tr><th>role</th>";
   for (const std::string& key : keys) html += "<th>" + Html(key) + "</th>";
@@ -543,22 +545,21 @@ std::string ReportBuilder::InputFlightsTable() const {
   for (const auto& [role, f] : flights) {
     html += "<tr><td>" + role + "</td>";
     for (const std::string& key : keys)
-      html += "<td class=\"small\">" + (f.json().contains(key) ? InputCell(f.json()[key]) : "&ndash;") + "</td>";
+      html += "<td class=\"small\">" + (f.contains(key) ? InputCell(f[key]) : "&ndash;") + "</td>";
     html += "</tr>\n";
   }
   return html + "</tbody></table></div>\n";
 }
 
 std::string ReportBuilder::ChecksSection() const {
-  if (!root_.Has("checks")) return "";
+  if (!input_.checks) return "";
   std::string rows;
   int not_ok = 0;
-  for (const JsonNode& check : root_["checks"].Elements()) {
-    const std::string status = check["status"].String();
-    not_ok += status != "ok";
-    const char* cls = status == "ok" ? "yes" : status == "warning" ? "warn" : "bad";
-    rows += "<tr><td><code>" + Html(check["name"].String()) + "</code></td><td><span class=\"tag " + cls + "\">" +
-            Html(status) + "</span></td><td>" + Html(check["message"].String()) + "</td></tr>\n";
+  for (const Check& check : *input_.checks) {
+    not_ok += check.status != CheckStatus::kOk;
+    const char* cls = check.status == CheckStatus::kOk ? "yes" : check.status == CheckStatus::kWarning ? "warn" : "bad";
+    rows += "<tr><td><code>" + Html(check.name) + "</code></td><td><span class=\"tag " + cls + "\">" +
+            Html(CheckStatusName(check.status)) + "</span></td><td>" + Html(check.message) + "</td></tr>\n";
   }
   const std::string summary = not_ok ? "<div class=\"box bad\">" + std::to_string(not_ok) + " plausibility check" +
                                            (not_ok > 1 ? "s" : "") +
@@ -570,21 +571,20 @@ std::string ReportBuilder::ChecksSection() const {
 }
 
 bool ReportBuilder::AnyCheckNotOk() const {
-  if (!root_.Has("checks")) return false;
-  for (const JsonNode& check : root_["checks"].Elements())
-    if (check["status"].String() != "ok") return true;
-  return false;
+  if (!input_.checks) return false;
+  return std::any_of(input_.checks->begin(), input_.checks->end(),
+                     [](const Check& check) { return check.status != CheckStatus::kOk; });
 }
 
 std::string ReportBuilder::WarningsSection() const {
-  // The analysis's warnings, from the blocks whose writers emit them, and the report's own.
-  std::vector<std::string> analysis;
-  auto collect = [&](const JsonNode& list, const std::string& prefix) {
-    for (const JsonNode& w : list.Elements()) analysis.push_back(prefix + w.String());
+  // The analysis's warnings, from the results that carry them, and the report's own.
+  std::vector<std::string> analysis = input_.warnings;
+  auto collect = [&](const std::vector<std::string>& list, const std::string& prefix) {
+    for (const std::string& w : list) analysis.push_back(prefix + w);
   };
-  if (root_.Has("warnings")) collect(root_["warnings"], "");
-  for (const char* block : {"linear", "refined"})
-    if (root_.Has(block)) collect(root_[block]["warnings"], std::string(block) + ": ");
+  if (input_.diagnosis) collect(input_.diagnosis->warnings, "");
+  if (input_.linear) collect(input_.linear->warnings, "linear: ");
+  if (input_.refined) collect(input_.refined->warnings, "refined: ");
   std::string html = "<h2 id=\"warnings\">Warnings</h2>\n";
   if (analysis.empty() && warnings_.empty())
     return html + "<div class=\"box ok\">No warnings: the identification reported nothing suspicious.</div>\n";
@@ -611,20 +611,20 @@ std::string ReportBuilder::ParameterCells(const ParameterBlock& b, const std::st
   *discarded = false;
   std::optional<double> rel;
   std::string essential_cell = "&ndash;";
-  if (b.parameters && b.parameters->json().contains(name)) {
-    const JsonNode entry = (*b.parameters)[name];
-    *value = entry["value"].NumberOrNull();
-    *std_value = entry["std"].NumberOrNull();
-    rel = entry["rel_std_pct"].NumberOrNull();
-    *discarded = !entry["essential"].Bool();
+  if (const std::optional<ParameterStatistics> p = b.Statistics(name)) {
+    *value = Finite(p->value);
+    *std_value = Finite(p->std);
+    rel = Finite(p->rel_std_pct);
+    *discarded = !p->essential;
     // What the parameter looked like when it was dropped (only parameters the selection dropped
     // carry it; fixed ones do not).
     std::string why;
-    if (entry.Has("estimate_when_discarded"))
-      why = "estimate when discarded: " + FormatValue("%.4g", entry["estimate_when_discarded"].Number());
-    if (entry.Has("most_correlated_with") && !entry["most_correlated_with"].String().empty())
-      why += std::string(why.empty() ? "" : "; ") + "most correlated with " + entry["most_correlated_with"].String() +
-             (entry.Has("correlation") ? " (r = " + FormatValue("%.3f", entry["correlation"].Number()) + ")" : "");
+    if (p->discarded && std::isfinite(p->discarded->value))
+      why = "estimate when discarded: " + FormatValue("%.4g", p->discarded->value);
+    if (p->discarded && !p->discarded->most_correlated.empty())
+      why += std::string(why.empty() ? "" : "; ") + "most correlated with " + p->discarded->most_correlated +
+             (std::isfinite(p->discarded->correlation) ? " (r = " + FormatValue("%.3f", p->discarded->correlation) + ")"
+                                                       : "");
     essential_cell = *discarded ? "<span class=\"tag nope\"" + (why.empty() ? "" : " title=\"" + Html(why) + "\"") +
                                       ">discarded</span>"
                                 : "<span class=\"tag yes\">yes</span>";
@@ -641,8 +641,7 @@ std::string ReportBuilder::ParametersSection() const {
   if (blocks_.empty()) return "";
   std::vector<std::string> names;
   for (const ParameterBlock& b : blocks_) {
-    if (b.parameters)
-      for (const auto& item : b.parameters->Items()) names.push_back(item.first);
+    if (b.solution) names.insert(names.end(), b.names->begin(), b.names->end());
     if (b.set)
       for (const auto& item : b.set->values) names.push_back(item.first);
   }
@@ -685,22 +684,27 @@ std::string ReportBuilder::ParametersSection() const {
   return html + "</tbody></table>\n" + EffectsTable();
 }
 
-// The effect parameters of the refined block, each in its unit.
+// The effect parameters of the refined result, each in its unit, in name order (as refined.effects
+// lists them).
 std::string ReportBuilder::EffectsTable() const {
-  if (!root_.Has("refined")) return "";
+  if (!input_.refined) return "";
+  const RefineResult& refined = *input_.refined;
+  std::vector<EffectParameterEstimate> estimates =
+      EffectParameterEstimates(refined.effects, refined.effects_std, refined.enabled, refined.on_bound);
+  std::sort(estimates.begin(), estimates.end(),
+            [](const EffectParameterEstimate& a, const EffectParameterEstimate& b) { return a.name < b.name; });
   std::string rows;
-  for (const auto& [name, entry] : root_["refined"]["effects"].Items()) {
+  for (const EffectParameterEstimate& e : estimates) {
     // Effects that were not estimated are held at their initial value: say so rather than "0 +- 0".
-    const bool on = entry["enabled"].Bool();
-    const bool on_bound = entry.Has("on_bound") && entry["on_bound"].Bool();
-    rows +=
-        "<tr><td><code>" + Html(name) + "</code></td><td class=\"num" + std::string(on ? "" : " no") + "\">" +
-        internal::ValueWithStd(entry["value"].Numbers(), on ? entry["std"].Numbers() : std::vector<double>(),
-                               internal::EffectParameterUnit(name)) +
-        "</td><td>" +
-        (on ? (on_bound ? "<span class=\"tag warn\">on its bound</span>" : "<span class=\"tag yes\">estimated</span>")
-            : "<span class=\"tag nope\">not estimated</span>") +
-        "</td></tr>\n";
+    const std::vector<double> value(e.value.data(), e.value.data() + e.value.size());
+    const std::vector<double> std_dev = e.enabled ? std::vector<double>(e.std.data(), e.std.data() + e.std.size())
+                                                  : std::vector<double>();
+    rows += "<tr><td><code>" + Html(e.name) + "</code></td><td class=\"num" + std::string(e.enabled ? "" : " no") +
+            "\">" + internal::ValueWithStd(value, std_dev, internal::EffectParameterUnit(e.name)) + "</td><td>" +
+            (e.enabled ? (e.on_bound ? "<span class=\"tag warn\">on its bound</span>"
+                                     : "<span class=\"tag yes\">estimated</span>")
+                       : "<span class=\"tag nope\">not estimated</span>") +
+            "</td></tr>\n";
   }
   if (rows.empty()) return "";
   return "<h3>Unmodelled effects (refined)</h3>\n<table id=\"effects_table\"><thead><tr><th>effect parameter</th>"
@@ -728,18 +732,13 @@ std::string ReportBuilder::RelativeErrorSection() const {
   }
   // All flights together, as the command computed them.
   std::string combined;
-  auto add = [&](const std::string& what, const std::string& set, const JsonNode& values) {
-    combined += "<tr><td>" + Html(what) + "</td><td>" + Html(set) + "</td>" +
-                ComponentCells(values.Components(), kRotorComponents) + "</tr>\n";
+  auto add = [&](const RelativeErrorRow& row) {
+    combined += "<tr><td>" + Html(row.data) + "</td><td>" + Html(row.parameters) + "</td>" +
+                ComponentCells(row.relative_error_pct, kRotorComponents) + "</tr>\n";
   };
-  for (const char* block : {"linear", "refined"})
-    if (root_.Has(block)) add("identification flights", block, root_[block]["relative_error_pct"]);
-  if (root_.Has("held_out"))
-    for (const char* block : {"linear", "refined"})
-      add("held-out flights", block, root_["held_out"][block]["relative_error_pct"]);
-  if (root_.Has("params"))  // validate: saved parameters applied to the given flights
-    add("given flights", root_["block"].String() + " parameters of " + root_["params"].String(),
-        root_["relative_error_pct"]);
+  if (input_.linear) add({"identification flights", "linear", input_.linear->relative_error_pct});
+  if (input_.refined) add({"identification flights", "refined", input_.refined->relative_error_pct});
+  for (const RelativeErrorRow& row : input_.relative_errors) add(row);
   if (rows.empty() && combined.empty()) return "";
   std::string html =
       "<h2 id=\"table3\">Relative errors (the paper's Table III)</h2>\n<p>||&rho;<sub>j</sub>|| / "
@@ -797,10 +796,11 @@ std::string ReportBuilder::SpectrumSection() const {
 }
 
 std::string ReportBuilder::AblationSection() const {
-  if (!root_.Has("ablation")) return "";
-  const std::vector<JsonNode> rows = root_["ablation"].Elements();
-  bool any_held_out = false;
-  for (const JsonNode& entry : rows) any_held_out = any_held_out || entry.Has("held_out_relative_error_pct");
+  if (!input_.ablation) return "";
+  const std::vector<AblationEntry>& rows = input_.ablation->entries;
+  const bool any_held_out = std::any_of(rows.begin(), rows.end(), [](const AblationEntry& entry) {
+    return !entry.held_out_relative_error_pct.empty();
+  });
   std::string html =
       "<h2 id=\"ablation\">Ablation</h2>\n<table id=\"ablation_table\"><thead><tr><th rowspan=\"2\">effects</th>"
       "<th class=\"num\" rowspan=\"2\">parameters</th><th class=\"num\" rowspan=\"2\">AIC</th>"
@@ -808,25 +808,20 @@ std::string ReportBuilder::AblationSection() const {
       std::string(any_held_out ? "<th class=\"group sep\" colspan=\"4\">held-out (%)</th>" : "") + "</tr><tr>" +
       ComponentHeader(kRotorComponents) + (any_held_out ? ComponentHeader(kRotorComponents) : "") +
       "</tr></thead><tbody>\n";
-  for (const JsonNode& entry : rows)
+  for (const AblationEntry& entry : rows)
     html += "<tr><td>" + Html(AblationLabel(entry)) + "</td><td class=\"num\">" +
-            FormatValue("%.0f", entry["num_parameters"].Number()) + "</td><td class=\"num\">" +
-            General(entry["aic"].Number()) + "</td><td class=\"num\">" + General(entry["bic"].Number()) + "</td>" +
-            ComponentCells(entry["relative_error_pct"].Components(), kRotorComponents) +
-            (entry.Has("held_out_relative_error_pct")
-                 ? ComponentCells(entry["held_out_relative_error_pct"].Components(), kRotorComponents)
-             : any_held_out ? ComponentCells({}, kRotorComponents)
-                            : "") +
-            "</tr>\n";
+            std::to_string(entry.num_parameters) + "</td><td class=\"num\">" + General(entry.aic) +
+            "</td><td class=\"num\">" + General(entry.bic) + "</td>" +
+            ComponentCells(entry.relative_error_pct, kRotorComponents) +
+            (any_held_out ? ComponentCells(entry.held_out_relative_error_pct, kRotorComponents) : "") + "</tr>\n";
   html += "</tbody></table>\n";
   return html + FigureHtml("fig_ablation");
 }
 
 std::string ReportBuilder::SettingsSection() const {
-  std::vector<std::pair<std::string, std::string>> settings;
-  if (root_.Has("settings")) Flatten(report_["settings"], "", &settings);
-  for (const char* key : {"command", "rotorid_version", "params"})
-    if (root_.Has(key)) settings.emplace_back(key, root_[key].String());
+  std::vector<std::pair<std::string, std::string>> settings = input_.settings;
+  if (!input_.command.empty()) settings.emplace_back("command", input_.command);
+  if (!input_.rotorid_version.empty()) settings.emplace_back("rotorid_version", input_.rotorid_version);
   if (settings.empty()) return "";
   std::string html = "<h2 id=\"settings\">Run settings</h2>\n<table><tbody>\n";
   for (const auto& [key, value] : settings)
@@ -838,7 +833,9 @@ std::string ReportBuilder::Page() const {
   // A diagnosis is read verdict first; failed plausibility checks come before everything.
   const bool checks_first = AnyCheckNotOk();
   const std::string diagnosis =
-      internal::DiagnosisHtml(root_, [this](const std::string& name) { return FigureHtml(name); });
+      input_.diagnosis
+          ? internal::DiagnosisHtml(*input_.diagnosis, [this](const std::string& name) { return FigureHtml(name); })
+          : "";
   const std::string sections[] = {checks_first ? ChecksSection() : "",
                                   diagnosis,
                                   FlightsSection(),
@@ -859,8 +856,8 @@ std::string ReportBuilder::Page() const {
       "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"/>\n<title>" +
       Html(input_.title) + "</title>\n<style>" + kCss + "</style>\n</head>\n<body>\n<main>\n";
   html += "<h1>" + Html(input_.title) + "</h1>\n<div class=\"meta\">rotorid";
-  if (root_.Has("rotorid_version")) html += " " + Html(root_["rotorid_version"].String());
-  if (root_.Has("command")) html += " &middot; command <code>" + Html(root_["command"].String()) + "</code>";
+  if (!input_.rotorid_version.empty()) html += " " + Html(input_.rotorid_version);
+  if (!input_.command.empty()) html += " &middot; command <code>" + Html(input_.command) + "</code>";
   html += " &middot; written " + Html(stamp) + "</div>\n<nav>";
   const std::pair<const char*, const char*> links[] = {
       {"checks", "Checks"},         {"diagnosis", "Diagnosis"},      {"flights", "Flights"},  {"warnings", "Warnings"},
@@ -909,6 +906,7 @@ void ReportBuilder::RemoveStaleFigures(const std::set<std::string>& written) con
 ReportSummary ReportBuilder::Build() {
   for (const ReportFlight& f : input_.flights)
     if (!f.flight) throw Error("report: flight '" + f.label + "' has no data (null ProcessedFlight)");
+  if (input_.refined && !input_.linear) throw Error("report: a refined result needs its linear result (its parameters)");
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec || !std::filesystem::is_directory(dir_))
@@ -926,7 +924,7 @@ ReportSummary ReportBuilder::Build() {
   CollectMarks();
   RenderFigures(gnuplot_path_.empty() ? std::vector<FigureSpec>() : FigureSpecs());
 
-  // Composed before any file is written: a report JSON without a key its writer emits fails here.
+  // Composed before any file is written, so that a failure leaves the folder as it was.
   const std::string page = Page();
   ReportSummary summary;
   std::set<std::string> written;
@@ -973,19 +971,21 @@ std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flig
   return out;
 }
 
-std::vector<ParameterSet> ParameterSetsFromReport(const json& report) {
-  const JsonNode root(report, "");
+std::vector<ParameterSet> ParameterSetsFromReport(const json& report, const std::string& source) {
   std::vector<ParameterSet> sets;
   for (const char* block : {"linear", "refined"}) {
-    if (!root.Has(block)) continue;
-    ParameterSet set;
-    set.label = block;
-    for (const auto& [name, entry] : root[block]["parameters"].Items())
-      if (const std::optional<double> value = entry["value"].NumberOrNull()) set.values[name] = *value;
+    if (!report.contains(block) || report[block].is_null()) continue;
+    ParameterSet set{block, ParameterValuesFromReport(report, source, block), Effects()};
     if (std::string(block) == "refined") set.effects = EffectsFromReport(report);
     sets.push_back(std::move(set));
   }
   return sets;
+}
+
+std::vector<std::pair<std::string, std::string>> SettingsRows(const json& settings) {
+  std::vector<std::pair<std::string, std::string>> rows;
+  Flatten(settings, "", &rows);
+  return rows;
 }
 
 bool GnuplotAvailable(const std::string& gnuplot) { return !internal::FindExecutable(gnuplot).empty(); }

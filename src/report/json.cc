@@ -12,19 +12,31 @@ nlohmann::json JsonNumber(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
+ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names, const TlsSolution& solution,
+                                          size_t k) {
+  const auto i = static_cast<Eigen::Index>(k);
+  ParameterStatistics p{solution.chi[i], solution.std[i], solution.rel_std_pct[i],
+                        static_cast<bool>(solution.essential[k]), nullptr};
+  for (const DiscardedParameter& d : solution.discarded) {
+    if (d.name != names[k]) continue;
+    p.std = d.std;
+    p.discarded = &d;
+  }
+  return p;
+}
+
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
   nlohmann::json out = nlohmann::json::object();
   for (size_t k = 0; k < names.size(); ++k) {
-    nlohmann::json entry = {{"value", JsonNumber(solution.chi[k])},
-                            {"std", JsonNumber(solution.std[k])},
-                            {"rel_std_pct", JsonNumber(solution.rel_std_pct[k])},
-                            {"essential", static_cast<bool>(solution.essential[k])}};
-    for (const DiscardedParameter& d : solution.discarded) {
-      if (d.name != names[k]) continue;
-      entry["std"] = JsonNumber(d.std);
-      entry["estimate_when_discarded"] = JsonNumber(d.value);
-      entry["most_correlated_with"] = d.most_correlated;
-      entry["correlation"] = JsonNumber(d.correlation);
+    const ParameterStatistics p = ParameterStatisticsOf(names, solution, k);
+    nlohmann::json entry = {{"value", JsonNumber(p.value)},
+                            {"std", JsonNumber(p.std)},
+                            {"rel_std_pct", JsonNumber(p.rel_std_pct)},
+                            {"essential", p.essential}};
+    if (p.discarded) {
+      entry["estimate_when_discarded"] = JsonNumber(p.discarded->value);
+      entry["most_correlated_with"] = p.discarded->most_correlated;
+      entry["correlation"] = JsonNumber(p.discarded->correlation);
     }
     out[names[k]] = entry;
   }

@@ -1,11 +1,11 @@
 #include "rotorid/report/refine_json.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "rotorid/report/json.h"
 
 namespace rotorid {
-
 
 nlohmann::json RefineOptionsJson(const RefineOptions& options) {
   nlohmann::json effects = nlohmann::json::array();
@@ -19,28 +19,37 @@ nlohmann::json RefineOptionsJson(const RefineOptions& options) {
           {"max_iterations", options.max_iterations}};
 }
 
-nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled,
-                           const std::vector<EffectKind>& on_bound) {
-  nlohmann::json out = nlohmann::json::object();
+std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& value, const Effects& std_dev,
+                                                              const std::vector<EffectKind>& enabled,
+                                                              const std::vector<EffectKind>& on_bound) {
+  std::vector<EffectParameterEstimate> out;
   for (EffectKind kind : AllEffects()) {
     const bool on = std::find(enabled.begin(), enabled.end(), kind) != enabled.end();
-    const Eigen::VectorXd v = value.Get(kind), s = std_dev.Get(kind);
     const bool bounded = std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end();
-    const auto entry = [&](nlohmann::json estimate, nlohmann::json spread) {
-      return nlohmann::json{{"value", estimate}, {"std", spread}, {"enabled", on}, {"on_bound", bounded}};
-    };
+    const Eigen::VectorXd v = value.Get(kind), s = std_dev.Get(kind);
     const auto at = [](const Eigen::VectorXd& x, size_t k) {
       return static_cast<Eigen::Index>(k) < x.size() ? x[static_cast<Eigen::Index>(k)] : 0.0;
     };
     const std::vector<std::string>& labels = kind->info().labels;
-    if (!labels.empty()) {  // one key per coefficient, as INTERFACE.md names them
-      for (size_t k = 0; k < labels.size(); ++k) out[labels[k]] = entry(JsonNumber(at(v, k)), JsonNumber(at(s, k)));
-    } else if (kind->FixedDimension() == 1) {
-      out[EffectParameterName(kind)] = entry(JsonNumber(v[0]), JsonNumber(s[0]));
+    if (!labels.empty()) {  // one entry per coefficient, as INTERFACE.md names them
+      for (size_t k = 0; k < labels.size(); ++k)
+        out.push_back({labels[k], Eigen::VectorXd::Constant(1, at(v, k)), Eigen::VectorXd::Constant(1, at(s, k)),
+                       true, on, bounded});
     } else {
-      out[EffectParameterName(kind)] = entry(VectorJson(v), VectorJson(s));
+      out.push_back({EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded});
     }
   }
+  return out;
+}
+
+nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled,
+                           const std::vector<EffectKind>& on_bound) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const EffectParameterEstimate& e : EffectParameterEstimates(value, std_dev, enabled, on_bound))
+    out[e.name] = {{"value", e.scalar ? JsonNumber(e.value[0]) : VectorJson(e.value)},
+                   {"std", e.scalar ? JsonNumber(e.std[0]) : VectorJson(e.std)},
+                   {"enabled", e.enabled},
+                   {"on_bound", e.on_bound}};
   return out;
 }
 
@@ -69,6 +78,40 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
           {"autocorrelation_factor", JsonNumber(refined.autocorrelation_factor)},
           {"solver", SolverJson(refined.solver)},
           {"warnings", refined.warnings}};
+}
+
+nlohmann::json AblationJson(const AblationResult& ablation) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const AblationEntry& e : ablation.entries) {
+    nlohmann::json names = nlohmann::json::array();
+    for (EffectKind k : e.effects) names.push_back(EffectName(k));
+    nlohmann::json row = {{"effects", names},
+                          {"num_parameters", e.num_parameters},
+                          {"aic", e.aic},
+                          {"bic", e.bic},
+                          {"criterion", e.result.refined_criterion},
+                          {"relative_error_pct", ComponentsJson(e.relative_error_pct)},
+                          {"kt", e.result.refined.chi[0]},
+                          {"kd", e.result.refined.chi[1]},
+                          {"effects_values", EffectsJson(e.result.effects, e.result.effects_std, e.effects)}};
+    if (!e.held_out_relative_error_pct.empty())
+      row["held_out_relative_error_pct"] = ComponentsJson(e.held_out_relative_error_pct);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+nlohmann::json DelayJson(const IdentificationResult& linear, const DelayEstimate& estimate) {
+  nlohmann::json curve = nlohmann::json::array();
+  for (size_t i = 0; i < estimate.grid_s.size(); ++i) curve.push_back({estimate.grid_s[i], estimate.criterion[i]});
+  return {{"delay_s", estimate.delay_s},
+          {"delay_std_s", estimate.delay_std_s},
+          {"grid_best_s", estimate.grid_best_s},
+          {"motor_tau_s", estimate.motor_tau_s},
+          {"motor_tau_std_s", estimate.motor_tau_std_s},
+          {"criterion_curve", curve},
+          {"refined", RefinedJson(linear, estimate.refined)},
+          {"warnings", estimate.warnings}};
 }
 
 Effects EffectsFromReport(const nlohmann::json& report) {

@@ -14,6 +14,8 @@
 #include "rotorid/ident/identify.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/report/checks_json.h"
+#include "rotorid/report/input_json.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/refine_json.h"
 #include "rotorid/report/wrench_split.h"
@@ -138,10 +140,11 @@ TEST_F(WrenchSplitTest, RefinedEffectsShrinkTheErrorOfADelayedLog) {
   EXPECT_LT(*with_delay.relative_error_pct[3], *linear.relative_error_pct[3]);
 }
 
-// The report fed by the real writers: a simulated flight of configuration B with a 20 ms delay and
-// a held-out flight, identified (LinearJson), refined (RefinedJson) and diagnosed (DiagnosisJson),
-// the reports assembled as the commands assemble them. When a writer and the report's reader drift
-// apart, these tests fail.
+// The report of real results: a simulated flight of configuration B with a 20 ms delay and a
+// held-out flight, identified, refined and diagnosed, the report inputs assembled as the commands
+// assemble them. Its tables are compared with what the JSON writers (LinearJson, RefinedJson,
+// DiagnosisJson) emit for the same results: when the report and a writer show a result
+// differently, these tests fail.
 class HtmlReportTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -187,10 +190,11 @@ class HtmlReportTest : public ::testing::Test {
   static ReportInput IdentifyInput() {
     ReportInput input;
     input.title = "rotorid identify";
-    input.report = {{"rotorid_version", kRotoridVersion},
-                    {"command", "identify"},
-                    {"settings", {{"observation", (*settings_)["observation"]}, {"tls", (*settings_)["tls"]}}},
-                    {"linear", LinearJson(*linear_)}};
+    input.command = "identify";
+    input.rotorid_version = kRotoridVersion;
+    input.observation = ObservationOptions{};
+    input.settings = SettingsRows({{"observation", (*settings_)["observation"]}, {"tls", (*settings_)["tls"]}});
+    input.linear = linear_;
     input.flights = ReportFlights(linear_->flights, false);
     input.parameter_sets = {{"linear", LinearValues(), Effects()}};
     return input;
@@ -200,14 +204,12 @@ class HtmlReportTest : public ::testing::Test {
   static ReportInput RefineInput() {
     ReportInput input = IdentifyInput();
     input.title = "rotorid refine";
-    input.report["command"] = "refine";
-    input.report["refined"] = RefinedJson(*linear_, *refined_);
+    input.command = "refine";
+    input.refined = refined_;
     const std::map<std::string, double> refined_values = NamedParameters(linear_->system, refined_->refined.chi);
-    input.report["held_out"] = {
-        {"linear", {{"relative_error_pct", ComponentsJson(CombinedRelativeErrorPct(*held_out_, LinearValues()))}}},
-        {"refined",
-         {{"relative_error_pct",
-           ComponentsJson(RelativeErrorWithEffects(*held_out_, refined_values, refined_->effects))}}}};
+    input.relative_errors = {
+        {"held-out flights", "linear", CombinedRelativeErrorPct(*held_out_, LinearValues())},
+        {"held-out flights", "refined", RelativeErrorWithEffects(*held_out_, refined_values, refined_->effects)}};
     for (const ReportFlight& f : ReportFlights(*held_out_, true)) input.flights.push_back(f);
     input.parameter_sets.push_back({"refined", refined_values, refined_->effects});
     return input;
@@ -217,10 +219,11 @@ class HtmlReportTest : public ::testing::Test {
   static ReportInput DiagnoseInput() {
     ReportInput input;
     input.title = "rotorid diagnose";
-    input.report = DiagnosisJson(*diagnosis_);
-    input.report["rotorid_version"] = kRotoridVersion;
-    input.report["command"] = "diagnose";
-    input.report["settings"] = *settings_;
+    input.command = "diagnose";
+    input.rotorid_version = kRotoridVersion;
+    input.observation = ObservationOptions{};
+    input.settings = SettingsRows(*settings_);
+    input.diagnosis = diagnosis_;
     input.flights = ReportFlights(linear_->flights, false);
     for (const ReportFlight& f : ReportFlights(*held_out_, true)) input.flights.push_back(f);
     input.parameter_sets = {{"linear", diagnosis_->linear_parameters, Effects()}};
@@ -296,7 +299,7 @@ void ExpectParameterTableMatches(const std::vector<std::vector<std::string>>& ro
 TEST_F(HtmlReportTest, IdentifyReportShowsTheLinearJsonValues) {
   const ReportInput input = IdentifyInput();
   const std::string html = Write(input);
-  const json& linear = input.report["linear"];
+  const json linear = LinearJson(*input.linear);
   ExpectParameterTableMatches(TableCells(html, "parameters_table"), linear["parameters"], 1);
   // Table III over all flights equals linear.relative_error_pct.
   const auto table3 = TableCells(html, "table3_combined");
@@ -317,15 +320,16 @@ TEST_F(HtmlReportTest, IdentifyReportShowsTheLinearJsonValues) {
 TEST_F(HtmlReportTest, RefineReportShowsTheEffectsInTheirUnitsAndTheHeldOutErrors) {
   const ReportInput input = RefineInput();
   const std::string html = Write(input);
-  ExpectParameterTableMatches(TableCells(html, "parameters_table"), input.report["refined"]["parameters"], 5);
+  const json refined = RefinedJson(*input.linear, *input.refined);
+  ExpectParameterTableMatches(TableCells(html, "parameters_table"), refined["parameters"], 5);
   // delay_s is shown in ms: 1000 x the JSON value, with its std.
   const auto effects = TableCells(html, "effects_table");
-  ASSERT_EQ(effects.size(), input.report["refined"]["effects"].size());
+  ASSERT_EQ(effects.size(), refined["effects"].size());
   bool found = false;
   for (const auto& row : effects) {
     if (row[0] != "delay_s") continue;
     found = true;
-    const json& delay = input.report["refined"]["effects"]["delay_s"];
+    const json& delay = refined["effects"]["delay_s"];
     EXPECT_NEAR(CellNumber(row[1]), 1e3 * delay["value"].get<double>(), 1e-3 * 1e3 * delay["value"].get<double>());
     EXPECT_NEAR(1e-3 * CellNumber(row[1]), 0.02, 0.002);  // and the simulator's truth
     EXPECT_NE(row[1].find(" ms"), std::string::npos) << row[1];
@@ -335,7 +339,8 @@ TEST_F(HtmlReportTest, RefineReportShowsTheEffectsInTheirUnitsAndTheHeldOutError
   const auto combined = TableCells(html, "table3_combined");
   ASSERT_EQ(combined.size(), 4u);  // identification and held-out, linear and refined
   EXPECT_EQ(combined[3][0], "held-out flights");
-  EXPECT_NEAR(CellNumber(combined[3][3]), input.report["held_out"]["refined"]["relative_error_pct"]["Mx"].get<double>(),
+  // As `rotorid refine` writes held_out.refined.relative_error_pct.
+  EXPECT_NEAR(CellNumber(combined[3][3]), ComponentsJson(input.relative_errors[1].relative_error_pct)["Mx"].get<double>(),
               0.0051);
   if (!GnuplotAvailable()) GTEST_SKIP() << "gnuplot is not installed";
   EXPECT_EQ(FigureNames(),
@@ -346,7 +351,7 @@ TEST_F(HtmlReportTest, RefineReportShowsTheEffectsInTheirUnitsAndTheHeldOutError
 
 TEST_F(HtmlReportTest, DiagnoseReportGivesTheVerdictFirstAndTablesEqualToTheJson) {
   const ReportInput input = DiagnoseInput();
-  const json& report = input.report;
+  const json report = DiagnosisJson(*input.diagnosis);
   const std::string html = Write(input);
   // The verdict, verbatim, before every other section.
   const size_t verdict = html.find("id=\"diagnosis_verdict\"");
@@ -424,70 +429,104 @@ TEST_F(HtmlReportTest, DiagnoseReportGivesTheVerdictFirstAndTablesEqualToTheJson
   EXPECT_EQ(CountOccurrences(ReadFile(dir_ + "/fig_wrench_2.svg"), shade), 0);
 }
 
-TEST_F(HtmlReportTest, AKeyTheWriterEmitsIsRequiredAndNamedWhenMissing) {
-  auto message = [&](const ReportInput& input) -> std::string {
-    try {
-      WriteHtmlReport(dir_, input, options_);
-    } catch (const Error& e) {
-      return e.what();
-    }
-    return "no error";
-  };
-  ReportInput input = DiagnoseInput();
-  input.report["where"].erase("bands");
-  EXPECT_NE(message(input).find("'where.bands'"), std::string::npos) << message(input);
-  input = DiagnoseInput();
-  input.report["ranking"][0].erase("status");
-  EXPECT_NE(message(input).find("'ranking[0].status'"), std::string::npos) << message(input);
-  input = IdentifyInput();
-  input.report["linear"]["relative_error_pct"].erase("Mx");
-  EXPECT_NE(message(input).find("'linear.relative_error_pct.Mx'"), std::string::npos) << message(input);
-  input = IdentifyInput();
-  input.report["linear"]["parameters"]["kt"]["essential"] = "yes";
-  EXPECT_NE(message(input).find("'linear.parameters.kt.essential' is string"), std::string::npos) << message(input);
-  input = RefineInput();
-  input.report["refined"]["effects"]["delay_s"].erase("enabled");
-  EXPECT_NE(message(input).find("'refined.effects.delay_s.enabled'"), std::string::npos) << message(input);
-  // A block the command did not write is simply not shown.
-  input = IdentifyInput();
-  EXPECT_EQ(message(input), "no error");
-  EXPECT_EQ(ReadFile(dir_ + "/report.html").find("id=\"diagnosis\""), std::string::npos);
+// As `rotorid validate --params refine.json --report` writes it: the saved parameter sets, read
+// back from the writers' JSON, applied to other flights.
+TEST_F(HtmlReportTest, ValidateReportShowsTheSavedParametersOnTheGivenFlights) {
+  const json saved = {{"linear", LinearJson(*linear_)}, {"refined", RefinedJson(*linear_, *refined_)}};
+  ReportInput input;
+  input.title = "rotorid validate";
+  input.command = "validate";
+  input.observation = ObservationOptions{};
+  input.flights = ReportFlights(*held_out_, true);
+  input.parameter_sets = ParameterSetsFromReport(saved, "refine.json");
+  ASSERT_EQ(input.parameter_sets.size(), 2u);
+  const ParameterSet& refined = input.parameter_sets[1];
+  EXPECT_EQ(refined.label, "refined");
+  EXPECT_NEAR(refined.effects.Get(ParseEffectKind("delay"))[0], refined_->effects.Get(ParseEffectKind("delay"))[0],
+              1e-12);
+  const std::vector<std::optional<double>> combined =
+      RelativeErrorWithEffects(*held_out_, refined.values, refined.effects);
+  input.relative_errors = {{"given flights", "refined parameters of refine.json", combined}};
+  const std::string html = Write(input);
+  // The refined values (the second set's value column) are the saved ones.
+  ExpectParameterTableMatches(TableCells(html, "parameters_table"), saved["refined"]["parameters"], 5);
+  EXPECT_EQ(TableCells(html, "table3_flights").size(), 2u);  // one held-out flight, two sets
+  const auto given = TableCells(html, "table3_combined");
+  ASSERT_EQ(given.size(), 1u);
+  EXPECT_EQ(given[0][0], "given flights");
+  EXPECT_NEAR(CellNumber(given[0][3]), *combined[3], 0.0051);
+  // A saved report without a parameter's value names the file.
+  json broken = saved;
+  broken["linear"]["parameters"]["kt"].erase("value");
+  try {
+    ParameterSetsFromReport(broken, "refine.json");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("refine.json"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(HtmlReportTest, AResultTheCommandDidNotGiveIsNotShown) {
+  std::string html = Write(IdentifyInput());
+  for (const char* id : {"id=\"diagnosis\"", "id=\"effects_table\"", "id=\"ablation\"", "id=\"checks\""})
+    EXPECT_EQ(html.find(id), std::string::npos) << id;
+  // Without the linear result the parameter table has the set's values and no statistics.
+  ReportInput input = IdentifyInput();
+  input.linear = nullptr;
+  html = Write(input);
+  const auto parameters = TableCells(html, "parameters_table");
+  ASSERT_FALSE(parameters.empty());
+  for (const auto& row : parameters) {
+    EXPECT_FALSE(std::isnan(CellNumber(row[1]))) << row[0];
+    EXPECT_EQ(row[2], "-") << row[0];
+  }
+  EXPECT_EQ(TableCells(html, "table3_combined").size(), 0u);
 }
 
 TEST_F(HtmlReportTest, ChecksComeFirstWhenOneFailsAndWhatWasReadIsTabulated) {
-  // checks[] and input.flights[] (INTERFACE.md section 5, v2) as the contract defines them.
+  // checks[] and input.flights[] (INTERFACE.md section 5, v2), from the typed results their writers take.
   ReportInput input = IdentifyInput();
-  input.report["checks"] = {{{"name", "gravity_magnitude"}, {"status", "ok"}, {"message", "9.79 m/s^2 in hover"}},
-                            {{"name", "rotor_order"}, {"status", "error"}, {"message", "rotors 1 and 2 swapped"}}};
-  input.report["input"] = {{"flights",
-                            {{{"file", "B_train.csv"},
-                              {"format", "csv"},
-                              {"span_s", {0.0, 30.0}},
-                              {"rotor_signal", "rpm"},
-                              {"segments", {{{"start_s", 0.0}, {"end_s", 30.0}, {"reason", "kept"}}}}}}}};
-  input.report["input"]["validate_flights"] = {{{"file", "B_val.csv"}}};
+  input.checks = std::vector<Check>{{"gravity_magnitude", CheckStatus::kOk, "9.79 m/s^2 in hover"},
+                                    {"rotor_order", CheckStatus::kError, "rotors 1 and 2 swapped"}};
+  FlightInputSummary train;
+  train.file = "B_train.csv";
+  train.format = "csv";
+  train.log_end_s = 30.0;
+  train.rotor_signal = "rpm";
+  train.kept = {{0.0, 30.0}};
+  FlightInputSummary held = train;
+  held.file = "B_val.csv";
+  held.window = TimeWindow{2.0, 18.0};
+  input.inputs = {train};
+  input.validate_inputs = {held};
   std::string html = Write(input);
   ASSERT_NE(html.find("id=\"checks\""), std::string::npos);
   EXPECT_LT(html.find("id=\"checks\""), html.find("id=\"flights\""));
   const auto checks = TableCells(html, "checks_table");
-  ASSERT_EQ(checks.size(), 2u);
-  EXPECT_EQ(checks[1][0], "rotor_order");
+  const json checks_json = ChecksJson(*input.checks);
+  ASSERT_EQ(checks.size(), checks_json.size());
+  for (size_t k = 0; k < checks.size(); ++k) {
+    EXPECT_EQ(checks[k][0], checks_json[k]["name"]);
+    EXPECT_EQ(checks[k][1], checks_json[k]["status"]);
+    EXPECT_EQ(checks[k][2], checks_json[k]["message"]);
+  }
   EXPECT_EQ(checks[1][1], "error");
-  EXPECT_EQ(checks[1][2], "rotors 1 and 2 swapped");
+  // One column per key of input.flights[] entries, in the JSON's order: file first, window_s last.
   const auto read = TableCells(html, "input_flights");
   ASSERT_EQ(read.size(), 2u);
-  EXPECT_EQ(read[1][0], "held-out");
-  EXPECT_EQ(read[1][1], "B_val.csv");
-  EXPECT_EQ(read[1][2], "-");  // a key only the other flight has
   EXPECT_EQ(read[0][0], "identification");
+  EXPECT_EQ(read[1][0], "held-out");
+  const json train_json = InputJson({train}, {held});
+  ASSERT_EQ(read[0].size(), 1 + train_json["flights"][0].size());
   EXPECT_EQ(read[0][1], "B_train.csv");
-  EXPECT_NE(std::find(read[0].begin(), read[0].end(), "0, 30"), read[0].end());
+  EXPECT_EQ(read[1][1], "B_val.csv");
+  EXPECT_NE(std::find(read[0].begin(), read[0].end(), "0, 30"), read[0].end());  // log_span_s
+  EXPECT_EQ(read[0].back(), "-");                                                 // no window
+  EXPECT_EQ(read[1].back(), "2, 18");
   // All checks passing: the section moves to the end.
-  input.report["checks"][1]["status"] = "ok";
+  (*input.checks)[1].status = CheckStatus::kOk;
   html = Write(input);
   EXPECT_GT(html.find("id=\"checks\""), html.find("id=\"parameters\""));
-  input.report["checks"][1].erase("message");
-  EXPECT_THROW(Write(input), Error);
 }
 
 TEST_F(HtmlReportTest, WithoutGnuplotTheTablesAreStillWrittenAndTheReasonGiven) {
@@ -545,6 +584,10 @@ TEST_F(HtmlReportTest, EscapesTextAndCreatesTheFolder) {
 TEST_F(HtmlReportTest, RejectsBadInput) {
   ReportInput input;
   input.flights = {{"nothing", nullptr, false}};
+  EXPECT_THROW(WriteHtmlReport(dir_, input), Error);
+  // A refined result without the linear one it refines (whose parameters it names).
+  input = RefineInput();
+  input.linear = nullptr;
   EXPECT_THROW(WriteHtmlReport(dir_, input), Error);
   ReportOptions options;
   options.max_spectrum_segment = 100;

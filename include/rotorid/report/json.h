@@ -15,12 +15,24 @@ namespace rotorid {
 
 inline constexpr const char* kRotoridVersion = "0.1.0";
 
-// {"value", "std", "rel_std_pct", "essential"} for every parameter of a solution; discarded
-// parameters have value 0 (as used by the model) and keep their estimate at the moment they were
-// dropped under "estimate_when_discarded".
 // A number for a report: JSON has no NaN or infinity, so they become null.
 nlohmann::json JsonNumber(double value);
 
+// One parameter of a solution as the reports show it: discarded parameters have value 0 (as used
+// by the model) and the std, estimate and most correlated parameter of the moment they were dropped.
+struct ParameterStatistics {
+  double value = 0.0;
+  double std = 0.0;
+  double rel_std_pct = 0.0;
+  bool essential = true;
+  const DiscardedParameter* discarded = nullptr;  // into the solution; null unless the selection dropped it
+};
+// Of parameter `k` (named names[k]) of `solution`.
+ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names, const TlsSolution& solution,
+                                          size_t k);
+
+// {"value", "std", "rel_std_pct", "essential"} for every parameter of a solution (ParameterStatisticsOf);
+// a discarded one also has "estimate_when_discarded", "most_correlated_with" and "correlation".
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution);
 // {"Fx": null, "Fy": null, "Fz": 3.2, ...}
 nlohmann::json ComponentsJson(const std::vector<std::optional<double>>& values);
