@@ -27,11 +27,12 @@ Command AddIdentifyCommand(CLI::App& root) {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
     const std::vector<FlightData>& flights = loaded.flights;
-    // Long logs take seconds: an elapsed-time line on a terminal (nothing drawn for short work).
-    Progress progress("identify", 0, options->flights.quiet);
+    // Long logs take seconds: a progress line on a terminal (nothing drawn for short work).
+    Progress progress("identify: processing, system, TLS", IdentifySteps(flights), options->flights.quiet);
     progress.StartTicking();
     std::vector<Check> checks;
-    const IdentificationResult result = IdentifyWithChecks(flights, identify, &checks);
+    const IdentificationResult result =
+        IdentifyWithChecks(flights, identify, &checks, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)}};

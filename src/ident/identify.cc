@@ -114,13 +114,16 @@ std::map<std::string, double> NamedValues(const IdimSystem& system, const Eigen:
 
 }  // namespace
 
-IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options) {
+IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options,
+                                       const StepProgress& progress) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   IdentificationResult result;
   result.options = options;
   result.flights = std::move(flights);
   result.system = BuildIdimSystem(result.flights);
+  if (progress) progress(1, 2);
   result.solution = SolveIdim(result.system, options.tls);
+  if (progress) progress(2, 2);
   const TlsSolution& solution = result.solution;
   if (!solution.usable) {
     std::string sources;

@@ -76,8 +76,10 @@ std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& 
                                       const std::string& label, bool held_out);
 
 // Input checks, the identification, and the checks of its result. When the identification fails
-// while an input check has failed, the error names that likely cause.
+// while an input check has failed, the error names that likely cause. Progress steps
+// (IdentifySteps): each flight processed, the system built, the TLS solved.
+int IdentifySteps(const std::vector<FlightData>& flights);
 IdentificationResult IdentifyWithChecks(const std::vector<FlightData>& flights, const IdentifyOptions& options,
-                                        std::vector<Check>* checks);
+                                        std::vector<Check>* checks, const StepProgress& progress = {});
 
 }  // namespace rotorid

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rotorid/core/flight_log.h"
+#include "rotorid/core/step_progress.h"
 #include "rotorid/core/vehicle.h"
 #include "rotorid/ident/observation.h"
 #include "rotorid/ident/tls.h"
@@ -70,7 +71,9 @@ Excitation MeasureExcitation(const ProcessedFlight& flight);
 // configuration's roll/pitch inertia not identifiable without allow_partial), with a message that
 // names what and where.
 IdentificationResult Identify(const std::vector<FlightData>& flights, const IdentifyOptions& options);
-IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options);
+// Progress steps of IdentifyProcessed: the system built, then the TLS solved.
+IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, const IdentifyOptions& options,
+                                       const StepProgress& progress = {});
 
 // Per-flight fit (Table III per flight, mean force residuals) of parameters on processed flights.
 // `parameters` maps names ("kt", "kd", "<config>.<name>") to values; missing body parameters of a

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rotorid/core/step_progress.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/model/effects.h"
 
@@ -92,9 +93,6 @@ struct RefineResult {
   std::vector<std::string> resting_on_discarded;
   std::vector<std::string> warnings;
 };
-
-// Progress of long work: `done` of `total` steps, called from the calling thread after each step.
-using StepProgress = std::function<void(int done, int total)>;
 
 // Steps Refine reports: the coarse delay search when it runs, then each Ceres pass (at most four
 // with the re-selection); a refinement that settles early jumps to the total.
