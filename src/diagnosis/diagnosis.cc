@@ -304,10 +304,12 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
 
   // The final model on all identification data.
   diagnosis.final_parameters = diagnosis.linear_parameters;
+  std::vector<EffectKind> on_bound;  // kept effects whose final fit ended on a bound
   if (kept != 0) {
     const RefineResult result = RefineOnAllData(full, context.records.at(kept), options);
     diagnosis.final_effects = result.effects;
     diagnosis.final_parameters = NamedParameters(full.system, result.refined.chi);
+    on_bound = result.on_bound;
     timer.Mark("final refinement");
   }
 
@@ -330,6 +332,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   internal::MarkConfounded(diagnosis.confounded, &verdicts);
   timer.Mark("confounding");
   for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options);
+  internal::AddBoundNotes(on_bound, &verdicts);
   diagnosis.ranking = internal::Rank(std::move(verdicts), diagnosis.selected, unavailable);
 
   // Where.

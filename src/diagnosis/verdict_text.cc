@@ -1,7 +1,9 @@
 #include "diagnosis/verdict_text.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -44,6 +46,35 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options)
          << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd());
   }
   return note.str();
+}
+
+std::string OnBoundStatement(EffectKind kind, const Eigen::VectorXd& value) {
+  const double lower = kind->info().lower_bound, upper = kind->info().upper_bound;
+  const double none = std::numeric_limits<double>::infinity();
+  auto distance = [&](double v, double bound) { return bound != 0.0 ? std::abs(v - bound) : none; };
+  double nearest = none;
+  for (double v : value) nearest = std::min({nearest, distance(v, lower), distance(v, upper)});
+  const std::vector<std::string> labels = kind->Labels(static_cast<int>(value.size()));
+  std::string out;
+  int named = 0;
+  for (Eigen::Index k = 0; k < value.size(); ++k) {
+    const bool at_upper = distance(value[k], upper) == nearest, at_lower = distance(value[k], lower) == nearest;
+    if (nearest == none || !(at_upper || at_lower)) continue;
+    const double bound = at_upper ? upper : lower;
+    out += std::string(named++ ? ", " : "") + (value.size() == 1 ? kind->name() : labels[k]) + " = " +
+           kind->Format(value.segment(k, 1), {}) + " is on its " + (at_upper ? "upper" : "lower") + " bound (" +
+           kind->Format(Eigen::VectorXd::Constant(1, bound), {}) + ")";
+  }
+  if (named == 0) return "";
+  return out + (named == 1 ? ": the data push it further; treat it as absorbing something else"
+                           : ": the data push them further; treat them as absorbing something else");
+}
+
+void AddBoundNotes(const std::vector<EffectKind>& on_bound, std::vector<EffectVerdict>* verdicts) {
+  for (EffectVerdict& v : *verdicts)
+    if (v.selected && std::find(on_bound.begin(), on_bound.end(), v.kind) != on_bound.end())
+      if (const std::string statement = OnBoundStatement(v.kind, v.value); !statement.empty())
+        v.note += "; " + statement;
 }
 
 namespace {
@@ -124,6 +155,9 @@ std::string WhichText(const Diagnosis& d) {
           << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
           << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
           << "; held-out gap shrinks " << std::setprecision(1) << v.test.shrink_pct << " %)\n";
+      // What the final fit says beyond the shrink (VerdictNote): a bound it ended on.
+      if (const size_t more = v.note.find("; "); more != std::string::npos)
+        out << "       " << v.note.substr(more + 2) << "\n";
     }
   }
   for (const ConfoundedEffects& c : d.confounded) {
