@@ -82,46 +82,41 @@ std::vector<std::string> Activities(const Eigen::Vector3d& rate_rms, const Eigen
   return out;
 }
 
-}  // namespace
-
-GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::string, double>& final_parameters,
-                      const Effects& final_effects, const std::vector<EffectKind>& candidates,
-                      const GapLocationOptions& options) {
-  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
-  GapLocation out;
-  out.relative_error_pct = linear.relative_error_pct;
-  const std::map<std::string, double> linear_parameters = NamedParameters(linear.system, linear.solution.chi);
-
-  // Bands.
-  const size_t num_bands = options.bands.size();
+// Energy per band and component of the linear model's residual (`baseline`), the final model's and
+// the rotor-model wrench, over all flights, as RMS per row.
+std::vector<BandGap> BandGaps(const std::vector<ProcessedFlight>& flights,
+                              const std::vector<internal::FlightResidual>& baseline,
+                              const std::map<std::string, double>& final_parameters, const Effects& final_effects,
+                              const std::vector<std::pair<double, double>>& bands) {
+  const size_t num_bands = bands.size();
   std::vector<ComponentVector> residual_energy(num_bands, ComponentVector::Zero());
   std::vector<ComponentVector> final_energy(num_bands, ComponentVector::Zero());
   std::vector<ComponentVector> model_energy(num_bands, ComponentVector::Zero());
   double total_rows = 0.0, highest_rate = 0.0;
-  std::vector<internal::FlightResidual> baseline;
-  for (const ProcessedFlight& flight : linear.flights) {
-    baseline.push_back(internal::ResidualOf(flight, linear_parameters, Effects{}));
+  for (size_t f = 0; f < flights.size(); ++f) {
+    const ProcessedFlight& flight = flights[f];
     const internal::FlightResidual final_residual = internal::ResidualOf(flight, final_parameters, final_effects);
     const double rate = RowRateHz(flight);
     highest_rate = std::max(highest_rate, rate);
     total_rows += static_cast<double>(flight.num_rows_samples());
     for (int j = 0; j < kNumWrenchComponents; ++j) {
-      const std::vector<double> r = BandEnergies(baseline.back().residual.col(j), rate, options.bands);
-      const std::vector<double> f = BandEnergies(final_residual.residual.col(j), rate, options.bands);
-      const std::vector<double> m = BandEnergies(baseline.back().rotor_wrench.col(j), rate, options.bands);
+      const std::vector<double> r = BandEnergies(baseline[f].residual.col(j), rate, bands);
+      const std::vector<double> e = BandEnergies(final_residual.residual.col(j), rate, bands);
+      const std::vector<double> m = BandEnergies(baseline[f].rotor_wrench.col(j), rate, bands);
       for (size_t b = 0; b < num_bands; ++b) {
         residual_energy[b][j] += r[b];
-        final_energy[b][j] += f[b];
+        final_energy[b][j] += e[b];
         model_energy[b][j] += m[b];
       }
     }
   }
   ComponentVector residual_total = ComponentVector::Zero();
   for (size_t b = 0; b < num_bands; ++b) residual_total += residual_energy[b];
+  std::vector<BandGap> out;
   for (size_t b = 0; b < num_bands; ++b) {
     BandGap band;
-    band.low_hz = options.bands[b].first;
-    band.high_hz = options.bands[b].second > 0.0 ? options.bands[b].second : 0.5 * highest_rate;
+    band.low_hz = bands[b].first;
+    band.high_hz = bands[b].second > 0.0 ? bands[b].second : 0.5 * highest_rate;
     const double rows = std::max(total_rows, 1.0);
     band.residual_rms = (residual_energy[b] / rows).cwiseSqrt();
     band.final_residual_rms = (final_energy[b] / rows).cwiseSqrt();
@@ -132,94 +127,123 @@ GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::st
       if (band.model_rms[j] > 1e-12 * std::max(1.0, band.residual_rms[j]) && model_energy[b][j] > 0.0)
         band.residual_to_model_pct[j] = 100.0 * band.residual_rms[j] / band.model_rms[j];
     }
-    out.bands.push_back(band);
+    out.push_back(band);
   }
+  return out;
+}
 
-  // Stretches: windows of every flight, scaled per component by the flight's residual RMS.
+// The windows of one flight, the residual scaled per component by the flight's residual RMS.
+std::vector<FlightStretch> FlightWindows(const ProcessedFlight& flight, const internal::FlightResidual& residual,
+                                         const GapLocationOptions& options) {
   std::vector<FlightStretch> windows;
-  for (size_t f = 0; f < linear.flights.size(); ++f) {
-    const ProcessedFlight& flight = linear.flights[f];
-    const internal::FlightResidual& residual = baseline[f];
-    const int n = flight.num_rows_samples();
-    if (n < 2) continue;
-    const ComponentVector scale =
-        (residual.residual.colwise().squaredNorm().transpose() / n).cwiseSqrt().cwiseMax(1e-300);
-    Eigen::Vector3d flight_rate_rms = Eigen::Vector3d::Zero();
-    for (int r = 0; r < n; ++r) flight_rate_rms += flight.angular_velocity.row(flight.row_samples[r]).transpose().cwiseAbs2();
-    flight_rate_rms = (flight_rate_rms / n).cwiseSqrt();
-    auto time = [&](int r) { return flight.t_s[flight.row_samples[r]]; };
-    for (double start = time(0); start + options.window_s <= time(n - 1) + 1e-9; start += options.window_step_s) {
-      const double end = start + options.window_s;
-      ComponentVector residual_sq = ComponentVector::Zero(), wrench_sq = ComponentVector::Zero(),
-                      scaled_sq = ComponentVector::Zero();
-      Eigen::Vector3d rate_sq = Eigen::Vector3d::Zero();
-      double vertical = 0.0;
-      int rows = 0;
-      for (int r = 0; r < n; ++r) {
-        if (time(r) < start || time(r) >= end) continue;
-        ++rows;
-        for (int j = 0; j < kNumWrenchComponents; ++j) {
-          residual_sq[j] += residual.residual(r, j) * residual.residual(r, j);
-          wrench_sq[j] += residual.rotor_wrench(r, j) * residual.rotor_wrench(r, j);
-          const double scaled = residual.residual(r, j) / scale[j];
-          scaled_sq[j] += scaled * scaled;
-        }
-        const int i = flight.row_samples[r];
-        rate_sq += flight.angular_velocity.row(i).transpose().cwiseAbs2();
-        vertical += flight.specific_force(i, 2) - flight.gravity_mps2;
+  const int n = flight.num_rows_samples();
+  if (n < 2) return windows;
+  const ComponentVector scale =
+      (residual.residual.colwise().squaredNorm().transpose() / n).cwiseSqrt().cwiseMax(1e-300);
+  Eigen::Vector3d flight_rate_rms = Eigen::Vector3d::Zero();
+  for (int r = 0; r < n; ++r)
+    flight_rate_rms += flight.angular_velocity.row(flight.row_samples[r]).transpose().cwiseAbs2();
+  flight_rate_rms = (flight_rate_rms / n).cwiseSqrt();
+  auto time = [&](int r) { return flight.t_s[flight.row_samples[r]]; };
+  for (double start = time(0); start + options.window_s <= time(n - 1) + 1e-9; start += options.window_step_s) {
+    const double end = start + options.window_s;
+    ComponentVector residual_sq = ComponentVector::Zero(), wrench_sq = ComponentVector::Zero(),
+                    scaled_sq = ComponentVector::Zero();
+    Eigen::Vector3d rate_sq = Eigen::Vector3d::Zero();
+    double vertical = 0.0;
+    int rows = 0;
+    for (int r = 0; r < n; ++r) {
+      if (time(r) < start || time(r) >= end) continue;
+      ++rows;
+      for (int j = 0; j < kNumWrenchComponents; ++j) {
+        residual_sq[j] += residual.residual(r, j) * residual.residual(r, j);
+        wrench_sq[j] += residual.rotor_wrench(r, j) * residual.rotor_wrench(r, j);
+        const double scaled = residual.residual(r, j) / scale[j];
+        scaled_sq[j] += scaled * scaled;
       }
-      if (rows < 2) continue;
-      FlightStretch w;
-      w.flight = flight.source;
-      w.start_s = start;
-      w.end_s = end;
-      w.mean_square_ratio = scaled_sq.sum() / (kNumWrenchComponents * rows);
-      scaled_sq.maxCoeff(&w.dominant_component);
-      w.relative_error_pct = internal::RelativeErrorFromSums(residual_sq, wrench_sq);
-      w.angular_velocity_rms = (rate_sq / rows).cwiseSqrt();
-      w.mean_vertical_acceleration_mps2 = vertical / rows;
-      w.activities = Activities(w.angular_velocity_rms, flight_rate_rms, w.mean_vertical_acceleration_mps2);
-      windows.push_back(std::move(w));
+      const int i = flight.row_samples[r];
+      rate_sq += flight.angular_velocity.row(i).transpose().cwiseAbs2();
+      vertical += flight.specific_force(i, 2) - flight.gravity_mps2;
     }
+    if (rows < 2) continue;
+    FlightStretch w;
+    w.flight = flight.source;
+    w.start_s = start;
+    w.end_s = end;
+    w.mean_square_ratio = scaled_sq.sum() / (kNumWrenchComponents * rows);
+    scaled_sq.maxCoeff(&w.dominant_component);
+    w.relative_error_pct = internal::RelativeErrorFromSums(residual_sq, wrench_sq);
+    w.angular_velocity_rms = (rate_sq / rows).cwiseSqrt();
+    w.mean_vertical_acceleration_mps2 = vertical / rows;
+    w.activities = Activities(w.angular_velocity_rms, flight_rate_rms, w.mean_vertical_acceleration_mps2);
+    windows.push_back(std::move(w));
   }
+  return windows;
+}
+
+// The `count` worst windows (largest mean square ratio) that do not overlap a worse one.
+std::vector<FlightStretch> WorstStretches(std::vector<FlightStretch> windows, int count) {
   std::sort(windows.begin(), windows.end(),
             [](const FlightStretch& a, const FlightStretch& b) { return a.mean_square_ratio > b.mean_square_ratio; });
+  std::vector<FlightStretch> worst;
   for (const FlightStretch& w : windows) {
-    if (static_cast<int>(out.worst_stretches.size()) >= options.worst_stretches) break;
-    const bool overlaps = std::any_of(out.worst_stretches.begin(), out.worst_stretches.end(), [&](const FlightStretch& o) {
+    if (static_cast<int>(worst.size()) >= count) break;
+    const bool overlaps = std::any_of(worst.begin(), worst.end(), [&](const FlightStretch& o) {
       return o.flight == w.flight && w.start_s < o.end_s && o.start_s < w.end_s;
     });
-    if (!overlaps) out.worst_stretches.push_back(w);
+    if (!overlaps) worst.push_back(w);
   }
+  return worst;
+}
 
-  // Signatures of the candidate effects at zero, chi projected out.
-  if (!candidates.empty()) {
-    std::vector<std::string> free_parameters;
-    for (int k = 0; k < linear.system.num_parameters(); ++k)
-      if (linear.solution.essential[k]) free_parameters.push_back(linear.system.parameter_names[k]);
-    const internal::EffectLinearization linearization =
-        internal::LinearizeEffects(linear.flights, linear_parameters, free_parameters, Effects{}, candidates);
-    for (size_t k = 0; k < candidates.size(); ++k) {
-      const internal::EffectSubsetFit fit = internal::FitEffectSubset(linearization, {candidates[k]});
-      EffectSignature signature;
-      signature.kind = candidates[k];
-      signature.labels = fit.labels;
-      signature.residual_correlation = fit.residual_correlation;
-      signature.linearized_estimate = fit.step;
-      signature.linearized_std = fit.std;
-      signature.linearized_shrink_pct = 100.0 * fit.predicted_shrink;
-      ComponentVector energy = ComponentVector::Zero();
-      for (size_t c = 0; c < linearization.labels.size(); ++c) {
-        if (linearization.column_kind[c] != static_cast<int>(k)) continue;
-        for (Eigen::Index i = 0; i < linearization.effect_jacobian.rows(); ++i) {
-          const double g = linearization.effect_jacobian(i, static_cast<Eigen::Index>(c));
-          energy[linearization.row_component[i]] += g * g;
-        }
+// Signatures of the candidate effects at zero, chi projected out.
+std::vector<EffectSignature> Signatures(const IdentificationResult& linear,
+                                        const std::map<std::string, double>& linear_parameters,
+                                        const std::vector<EffectKind>& candidates) {
+  const internal::EffectLinearization linearization = internal::LinearizeEffects(
+      linear.flights, linear_parameters, internal::EssentialParameterNames(linear), Effects{}, candidates);
+  std::vector<EffectSignature> signatures;
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    const internal::EffectSubsetFit fit = internal::FitEffectSubset(linearization, {candidates[k]});
+    EffectSignature signature;
+    signature.kind = candidates[k];
+    signature.labels = fit.labels;
+    signature.residual_correlation = fit.residual_correlation;
+    signature.linearized_estimate = fit.step;
+    signature.linearized_std = fit.std;
+    signature.linearized_shrink_pct = 100.0 * fit.predicted_shrink;
+    ComponentVector energy = ComponentVector::Zero();
+    for (size_t c = 0; c < linearization.labels.size(); ++c) {
+      if (linearization.column_kind[c] != static_cast<int>(k)) continue;
+      for (Eigen::Index i = 0; i < linearization.effect_jacobian.rows(); ++i) {
+        const double g = linearization.effect_jacobian(i, static_cast<Eigen::Index>(c));
+        energy[linearization.row_component[i]] += g * g;
       }
-      if (energy.sum() > 0.0) signature.component_share_pct = 100.0 * energy / energy.sum();
-      out.signatures.push_back(std::move(signature));
     }
+    if (energy.sum() > 0.0) signature.component_share_pct = 100.0 * energy / energy.sum();
+    signatures.push_back(std::move(signature));
   }
+  return signatures;
+}
+
+}  // namespace
+
+GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::string, double>& final_parameters,
+                      const Effects& final_effects, const std::vector<EffectKind>& candidates,
+                      const GapLocationOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  GapLocation out;
+  out.relative_error_pct = linear.relative_error_pct;
+  const std::map<std::string, double> linear_parameters = NamedParameters(linear.system, linear.solution.chi);
+  std::vector<internal::FlightResidual> baseline;
+  for (const ProcessedFlight& flight : linear.flights)
+    baseline.push_back(internal::ResidualOf(flight, linear_parameters, Effects{}));
+  out.bands = BandGaps(linear.flights, baseline, final_parameters, final_effects, options.bands);
+  std::vector<FlightStretch> windows;
+  for (size_t f = 0; f < linear.flights.size(); ++f)
+    for (FlightStretch& w : FlightWindows(linear.flights[f], baseline[f], options)) windows.push_back(std::move(w));
+  out.worst_stretches = WorstStretches(std::move(windows), options.worst_stretches);
+  if (!candidates.empty()) out.signatures = Signatures(linear, linear_parameters, candidates);
   return out;
 }
 

@@ -68,6 +68,13 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
   return out;
 }
 
+std::vector<std::string> EssentialParameterNames(const IdentificationResult& linear) {
+  std::vector<std::string> names;
+  for (int k = 0; k < linear.system.num_parameters(); ++k)
+    if (linear.solution.essential[k]) names.push_back(linear.system.parameter_names[k]);
+  return names;
+}
+
 std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle) {
   return kind->Labels(kind->Dimension(vehicle));
 }
@@ -207,6 +214,14 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
     fit.residual_correlation[c] = norm > 0.0 ? projected.col(c).dot(r) / norm : 0.0;
   }
   return fit;
+}
+
+Eigen::VectorXd EffectColumns(const EffectSubsetFit& fit, EffectKind kind, const Eigen::VectorXd& per_column) {
+  Eigen::VectorXd out(EffectDimension(kind));
+  int k = 0;
+  for (size_t c = 0; c < fit.column_kind.size(); ++c)
+    if (fit.column_kind[c] == kind) out[k++] = per_column[static_cast<Eigen::Index>(c)];
+  return out;
 }
 
 }  // namespace rotorid::internal

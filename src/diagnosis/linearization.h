@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "rotorid/ident/identify.h"
 #include "rotorid/ident/observation.h"
 #include "rotorid/model/effects.h"
 
@@ -29,6 +30,10 @@ struct FlightResidual {
 };
 FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
                           const Effects& effects);
+
+// Names (as in NamedParameters) of the parameters the linear solution kept as essential: the chi
+// columns of a linearisation around it.
+std::vector<std::string> EssentialParameterNames(const IdentificationResult& linear);
 
 // Labels of an effect's scalar parameters for this vehicle: {"delay_s"} or {"acc_bias_x", "acc_bias_y",
 // "acc_bias_z"}.
@@ -69,5 +74,8 @@ struct EffectSubsetFit {
 };
 
 EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const std::vector<EffectKind>& subset);
+
+// The entries of `per_column` (one per column of `fit`: its step, std, ...) that belong to `kind`.
+Eigen::VectorXd EffectColumns(const EffectSubsetFit& fit, EffectKind kind, const Eigen::VectorXd& per_column);
 
 }  // namespace rotorid::internal

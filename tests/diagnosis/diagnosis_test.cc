@@ -94,6 +94,25 @@ TEST(DiagnosisTest, DelayPlusLagIsReportedAsConfoundedWithWhatTheDataFix) {
   EXPECT_NEAR(value, 0.025, 0.004) << DiagnosisVerdict(d);
 }
 
+// An acc bias standing in for a large delay and lag (the thrust they delay) runs to its bound: the
+// verdict says so instead of reporting the bound as an estimate.
+TEST(DiagnosisTest, KeptEffectOnItsBoundIsNamedInTheVerdict) {
+  Effects withheld;
+  withheld.Set("delay_s", 0.05);
+  withheld.Set("motor_tau_s", 0.08);
+  const EffectKind acc_bias = ParseEffectKind("acc_bias");
+  DiagnosisOptions options = TestOptions();
+  options.candidates = {acc_bias};
+  const Diagnosis d = Diagnose({SimulatedFlight(45.0, 5, withheld)}, {}, options);
+  ASSERT_EQ(d.selected, std::vector<EffectKind>{acc_bias}) << DiagnosisVerdict(d);
+  ASSERT_EQ(d.final_effects.Get(acc_bias)[2], acc_bias->info().upper_bound) << DiagnosisVerdict(d);
+  const std::string statement =
+      "acc_bias_z = 2 m/s^2 is on its upper bound (2 m/s^2): the data push it further; treat it as absorbing "
+      "something else";
+  EXPECT_NE(VerdictOf(d, acc_bias).note.find("; " + statement), std::string::npos) << VerdictOf(d, acc_bias).note;
+  EXPECT_NE(DiagnosisVerdict(d).find("\n       " + statement + "\n"), std::string::npos) << DiagnosisVerdict(d);
+}
+
 // A per-rotor effect is refused with the reason (it used to crash the fold fits).
 TEST(DiagnosisTest, PerRotorCandidateIsRefusedByName) {
   DiagnosisOptions options = TestOptions();

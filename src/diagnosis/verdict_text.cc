@@ -1,0 +1,199 @@
+#include "diagnosis/verdict_text.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include "diagnosis/selection.h"
+#include "rotorid/model/parameters.h"
+
+namespace rotorid {
+
+std::string FormatEffectMagnitude(EffectKind kind, const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) {
+  return kind->Format(value, std_dev);
+}
+
+std::string DiagnosisVerdict(const Diagnosis& d) {
+  return "held out: " + d.validation + " (" + std::to_string(d.held_out_row_samples) + " row samples)\n" +
+         internal::WhereText(d) + internal::WhichText(d) + internal::HowFarText(d);
+}
+
+namespace internal {
+
+std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options) {
+  std::ostringstream note;
+  if (v.status == "selected") {
+    note << "held-out gap shrinks " << std::fixed << std::setprecision(1) << v.test.shrink_pct << " %";
+  } else if (v.dropped_as_redundant) {
+    note << "selected early, but not significant once " << Join(v.tested_on_top_of) << " were in (held-out shrink "
+         << std::setprecision(2) << std::fixed << v.test.shrink_pct << " %): dropped as redundant";
+  } else if (v.test.screened && v.test.shrink_pct >= options.screen_fraction * options.min_shrink_pct) {
+    note << "not refined: its predicted in-sample shrink (" << std::setprecision(2) << std::fixed << v.test.shrink_pct
+         << " %) was well below the leading candidate's at step " << v.step << ", where the selection stopped";
+  } else if (v.test.screened) {
+    note << "not refined: its first-order in-sample shrink is only " << std::setprecision(2) << std::fixed
+         << v.test.shrink_pct << " %; this data would reveal it above "
+         << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd());
+  } else if (v.status == "confounded") {
+    note << "removes as much held-out residual as " << EffectName(v.confounded_with.front())
+         << "; the data cannot tell them apart";
+  } else {
+    const Eigen::VectorXd ratio = v.value.cwiseAbs().cwiseQuotient(v.detectable_above.cwiseMax(1e-300));
+    note << (ratio.maxCoeff() < 1.0 ? "not detected" : "not significant") << "; this data would reveal it above "
+         << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd());
+  }
+  return note.str();
+}
+
+std::string OnBoundStatement(EffectKind kind, const Eigen::VectorXd& value) {
+  const double lower = kind->info().lower_bound, upper = kind->info().upper_bound;
+  const double none = std::numeric_limits<double>::infinity();
+  auto distance = [&](double v, double bound) { return bound != 0.0 ? std::abs(v - bound) : none; };
+  double nearest = none;
+  for (double v : value) nearest = std::min({nearest, distance(v, lower), distance(v, upper)});
+  const std::vector<std::string> labels = kind->Labels(static_cast<int>(value.size()));
+  std::string out;
+  int named = 0;
+  for (Eigen::Index k = 0; k < value.size(); ++k) {
+    const bool at_upper = distance(value[k], upper) == nearest, at_lower = distance(value[k], lower) == nearest;
+    if (nearest == none || !(at_upper || at_lower)) continue;
+    const double bound = at_upper ? upper : lower;
+    out += std::string(named++ ? ", " : "") + (value.size() == 1 ? kind->name() : labels[k]) + " = " +
+           kind->Format(value.segment(k, 1), {}) + " is on its " + (at_upper ? "upper" : "lower") + " bound (" +
+           kind->Format(Eigen::VectorXd::Constant(1, bound), {}) + ")";
+  }
+  if (named == 0) return "";
+  return out + (named == 1 ? ": the data push it further; treat it as absorbing something else"
+                           : ": the data push them further; treat them as absorbing something else");
+}
+
+void AddBoundNotes(const std::vector<EffectKind>& on_bound, std::vector<EffectVerdict>* verdicts) {
+  for (EffectVerdict& v : *verdicts)
+    if (v.selected && std::find(on_bound.begin(), on_bound.end(), v.kind) != on_bound.end())
+      if (const std::string statement = OnBoundStatement(v.kind, v.value); !statement.empty())
+        v.note += "; " + statement;
+}
+
+namespace {
+
+std::string Percent(const std::optional<double>& v) {
+  std::ostringstream s;
+  if (v)
+    s << std::fixed << std::setprecision(2) << *v << " %";
+  else
+    s << "n/a";
+  return s.str();
+}
+
+// The band where the selected effects remove the most residual energy of component j, else the band
+// that holds the most of it.
+std::string BandText(const Diagnosis& d, int j) {
+  auto removed = [&](const BandGap& b) {
+    return b.residual_rms[j] * b.residual_rms[j] - b.final_residual_rms[j] * b.final_residual_rms[j];
+  };
+  size_t band = 0;
+  for (size_t b = 1; b < d.where.bands.size(); ++b) {
+    const bool better = d.selected.empty() ? d.where.bands[b].share_pct[j] > d.where.bands[band].share_pct[j]
+                                           : removed(d.where.bands[b]) > removed(d.where.bands[band]);
+    if (better) band = b;
+  }
+  const BandGap& bg = d.where.bands[band];
+  std::ostringstream out;
+  out << std::fixed << ";\n       mostly at " << std::setprecision(0) << bg.low_hz << "-" << bg.high_hz << " Hz ("
+      << bg.share_pct[j] << " % of its residual energy";
+  if (!d.selected.empty() && bg.residual_rms[j] > 0.0)
+    out << ", of which the selected effects remove " << 100.0 * removed(bg) / (bg.residual_rms[j] * bg.residual_rms[j])
+        << " %";
+  out << ")";
+  return out.str();
+}
+
+std::string StretchText(const FlightStretch& w) {
+  std::ostringstream out;
+  out << std::fixed << ";\n       worst stretch " << std::setprecision(1) << w.start_s << "-" << w.end_s << " s (";
+  for (size_t a = 0; a < w.activities.size(); ++a) out << (a ? ", " : "") << w.activities[a];
+  out << "; rates " << std::setprecision(2) << w.angular_velocity_rms[0] << "/" << w.angular_velocity_rms[1] << "/"
+      << w.angular_velocity_rms[2] << " rad/s RMS; " << std::setprecision(1) << w.mean_square_ratio
+      << "x the flight's mean square, mostly " << kWrenchComponentNames[w.dominant_component] << ")";
+  return out.str();
+}
+
+}  // namespace
+
+std::string WhereText(const Diagnosis& d) {
+  const int j = d.where_component;
+  const HeldOutGap& b = d.baseline;
+  std::string out;
+  const bool beyond_noise =
+      b.gap_pct[j] && b.noise_floor_pct[j] && *b.gap_pct[j] >= std::sqrt(2.0) * *b.noise_floor_pct[j];
+  if (beyond_noise)
+    out = "where: the largest held-out gap beyond the noise floor is in " + std::string(kWrenchComponentNames[j]) +
+          ": " + Percent(b.model_error_pct[j]) + (j < 2 ? " of the thrust" : "") + " (gap " + Percent(b.gap_pct[j]) +
+          ", noise floor " + Percent(b.noise_floor_pct[j]) + ")";
+  else
+    out = "where: no component's held-out gap is well above its noise floor (closest: " +
+          std::string(kWrenchComponentNames[j]) + ", gap " + Percent(b.gap_pct[j]) + " against " +
+          Percent(b.noise_floor_pct[j]) + ")";
+  if (!d.where.bands.empty()) out += BandText(d, j);
+  if (!d.where.worst_stretches.empty()) out += StretchText(d.where.worst_stretches.front());
+  return out + "\n";
+}
+
+std::string WhichText(const Diagnosis& d) {
+  std::ostringstream out;
+  out << std::fixed;
+  if (d.selected.empty()) {
+    out << "which: no candidate effect removes significant held-out residual; the model explains these flights "
+           "as well as the candidates can\n";
+  }
+  for (const EffectVerdict& v : d.ranking) {
+    if (v.selected) {
+      out << (v.kind == d.selected.front() ? "which: " : "     + ") << EffectName(v.kind) << " = "
+          << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
+          << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
+          << "; held-out gap shrinks " << std::setprecision(1) << v.test.shrink_pct << " %)\n";
+      // What the final fit says beyond the shrink (VerdictNote): a bound it ended on.
+      if (const size_t more = v.note.find("; "); more != std::string::npos)
+        out << "       " << v.note.substr(more + 2) << "\n";
+    }
+  }
+  for (const ConfoundedEffects& c : d.confounded) {
+    out << "       " << c.note;
+    if (c.correlation) out << " (correlation " << std::setprecision(2) << *c.correlation << ")";
+    out << "\n";
+  }
+  for (const EffectVerdict& v : d.ranking)
+    if (!v.selected) out << "       " << EffectName(v.kind) << ": " << v.note << "\n";
+  return out.str();
+}
+
+std::string HowFarText(const Diagnosis& d) {
+  std::ostringstream out;
+  out << std::fixed << "how far (held-out gap, %; Fx, Fy against the thrust): baseline";
+  for (EffectKind kind : d.selected) out << " -> +" << EffectName(kind);
+  out << "\n";
+  auto value = [&](const std::optional<double>& v) {
+    if (v)
+      out << std::setprecision(2) << *v;
+    else
+      out << "n/a";
+  };
+  for (int c = 0; c < kNumWrenchComponents; ++c) {
+    out << "       " << kWrenchComponentNames[c] << " ";
+    value(d.baseline.gap_pct[c]);
+    for (const SelectionStep& step : d.steps) {
+      out << " -> ";
+      value(step.after.gap_pct[c]);
+    }
+    out << "  (noise floor ";
+    value(d.baseline.noise_floor_pct[c]);
+    out << ")\n";
+  }
+  return out.str();
+}
+
+}  // namespace internal
+}  // namespace rotorid

@@ -1,0 +1,34 @@
+#pragma once
+
+// Text of the diagnosis for people (internal): the note of each candidate's verdict, and the parts
+// of DiagnosisVerdict.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "rotorid/diagnosis/diagnosis.h"
+
+namespace rotorid::internal {
+
+// The note of a verdict: why it was kept, dropped, not refined, confounded or not significant. A
+// kept effect's note is its held-out shrink; what the final fit says about it follows after "; ".
+std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options);
+
+// "motor_lag = 300 ms is on its upper bound (300 ms): the data push it further; treat it as
+// absorbing something else", for an effect that its refinement ended on a bound (RefineResult::
+// on_bound): the coordinates nearest a non-zero bound of its descriptor (the refinement keeps
+// estimates inside those; a zero bound, tau >= 0, is a physical limit, not a failure to fit).
+std::string OnBoundStatement(EffectKind kind, const Eigen::VectorXd& value);
+
+// Appends OnBoundStatement to the notes of the kept effects in `on_bound`.
+void AddBoundNotes(const std::vector<EffectKind>& on_bound, std::vector<EffectVerdict>* verdicts);
+
+// The lines of DiagnosisVerdict: where (component, band, stretch), which (the kept effects with
+// what the final fit says about them, the confounding notes and the other candidates' notes), and
+// how far (the held-out gap per component after each kept effect).
+std::string WhereText(const Diagnosis& d);
+std::string WhichText(const Diagnosis& d);
+std::string HowFarText(const Diagnosis& d);
+
+}  // namespace rotorid::internal
