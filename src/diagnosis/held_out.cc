@@ -185,8 +185,7 @@ PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual&
   return out;
 }
 
-EffectTest ScreeningTest(double shrink_fraction, int added_parameters, double effective_samples, Eigen::Index rows,
-                         double alpha, double min_shrink_pct) {
+EffectTest ScreeningTest(double shrink_fraction, int added_parameters, double effective_samples, Eigen::Index rows) {
   EffectTest test;
   test.screened = true;
   test.added_parameters = added_parameters;
@@ -199,8 +198,6 @@ EffectTest ScreeningTest(double shrink_fraction, int added_parameters, double ef
     test.p_value = FSurvival(test.f_statistic, q, effective_samples - q);
   }
   test.significant = false;  // only held-out data can make an effect significant
-  (void)alpha;
-  (void)min_shrink_pct;
   return test;
 }
 

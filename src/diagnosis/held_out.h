@@ -74,8 +74,7 @@ PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual&
 // The in-sample score test of the screening: a first-order fit of the effect removes this
 // fraction of the (scaled) residual; F = f / (1 - f) (N - q) / (q a) with N rows and a the
 // autocorrelation factor (effective_samples = N / a).
-EffectTest ScreeningTest(double shrink_fraction, int added_parameters, double effective_samples, Eigen::Index rows,
-                         double alpha, double min_shrink_pct);
+EffectTest ScreeningTest(double shrink_fraction, int added_parameters, double effective_samples, Eigen::Index rows);
 
 // Relative error per component (Table III: ||rho_j|| / ||rotor wrench_j||, null when 0) and the gap
 // (Fx and Fy against the thrust instead) of residual / wrench sums of squares.

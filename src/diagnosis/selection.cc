@@ -85,16 +85,16 @@ std::vector<double> ScreeningGrid(EffectKind kind, const DiagnosisOptions& optio
 
 namespace {
 
-// Best in-sample shrink (% of the TLS criterion) of a strongly nonlinear candidate over its
+// Best in-sample shrink (fraction of the TLS criterion) of a strongly nonlinear candidate over its
 // screening grid, on top of `base` effects.
-double GridShrinkPct(const IdentificationResult& full, const Effects& base, EffectKind kind,
+double GridShrinkFraction(const IdentificationResult& full, const Effects& base, EffectKind kind,
                      const DiagnosisOptions& options) {
   const std::vector<double> grid = ScreeningGrid(kind, options);
   const double without = EffectCriterion(full, base);
   if (!(without > 0.0)) return 0.0;
   const std::vector<double> criterion = CriterionOverGrid(full, base, kind, grid, options.num_threads);
   const double best = std::min(without, *std::min_element(criterion.begin(), criterion.end()));
-  return 100.0 * (1.0 - best / without);
+  return 1.0 - best / without;
 }
 
 // Where the screening linearises: the base model's fold means (the linear model at step 1).
@@ -136,9 +136,8 @@ void ScreenCandidate(EffectKind kind, const EffectLinearization& linearization, 
   // first-order shrink can be a tenth of the real one (PWM-driven Crazyflie flights). The
   // screening of such effects also takes the best in-sample shrink over a coarse grid.
   if (!ScreeningGrid(kind, options).empty())
-    predicted = std::max(predicted, GridShrinkPct(full, point.effects, kind, options));
-  t->screening = ScreeningTest(predicted, EffectDimension(kind), fit.effective_samples, linearization.scored_rows,
-                               options.alpha, options.min_shrink_pct);
+    predicted = std::max(predicted, GridShrinkFraction(full, point.effects, kind, options));
+  t->screening = ScreeningTest(predicted, EffectDimension(kind), fit.effective_samples, linearization.scored_rows);
   t->test = t->screening;
   if (t->step == 1) t->alone = t->test;
 }

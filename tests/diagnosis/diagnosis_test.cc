@@ -49,6 +49,10 @@ TEST(DiagnosisTest, WithheldDelayIsRankedFirstAndItsSizeRecovered) {
   EXPECT_NEAR(first.value[0], withheld.Scalar("delay_s"), 1e-3);  // the refinement issue's tolerance
   EXPECT_GT(first.std[0], 0.0);
   EXPECT_GT(first.test.shrink_pct, 10.0);
+  // Its screening (the best in-sample shrink over the delay grid) is a share of the criterion, on
+  // the same scale as the first-order screening of the other candidates.
+  EXPECT_GT(first.screening.shrink_pct, 10.0);
+  EXPECT_LE(first.screening.shrink_pct, 100.0);
   // The held-out gap of the rotor-driven components shrinks.
   for (int j : {2, 3, 4}) EXPECT_LT(*d.final_gap.relative_error_pct[j], *d.baseline.relative_error_pct[j]) << j;
   EXPECT_EQ(d.selected.size(), 1u) << DiagnosisVerdict(d);
