@@ -63,15 +63,25 @@ Command AddDiagnoseCommand(CLI::App& root) {
     std::vector<ProcessedFlight> held_out;
     if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, diagnosis.identify.observation);
 
-    Progress progress("diagnose", 0, options->flights.quiet);
+    // One progress line per batch of fold refinements, each with its total and an ETA.
+    std::unique_ptr<Progress> progress;
+    std::string batch;
+    auto on_progress = [&](const std::string& label, int done, int total) {
+      if (!progress || label != batch || done == 0) {
+        batch = label;
+        progress = std::make_unique<Progress>("diagnose: " + label, total, options->flights.quiet);
+        progress->StartTicking();
+      }
+      progress->Update(done);
+    };
     Diagnosis result;
     try {
-      result = Diagnose(flights, held_out, diagnosis, [&](int done) { progress.Update(done); });
+      result = Diagnose(flights, held_out, diagnosis, on_progress);
     } catch (const Error& e) {
       if (!AnyCheckFailed(checks)) throw;
       throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(checks));
     }
-    progress.Finish();
+    progress.reset();
     std::vector<std::string> configs;
     for (const ProcessedFlight& f : flights)
       if (std::find(configs.begin(), configs.end(), f.vehicle.name) == configs.end()) configs.push_back(f.vehicle.name);

@@ -100,6 +100,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
       records[m].fold_parameters.resize(folds);
     }
     std::vector<std::string> errors(masks.size() * folds);
+    StartBatch(static_cast<int>(masks.size()));
     ParallelFor(static_cast<int>(masks.size()) * folds, options_.num_threads, [&](int task) {
       const int m = task / folds, k = task % folds;
       try {
@@ -146,10 +147,18 @@ class HeldOutEvaluator : public internal::ModelFitter {
     }
   }
 
+  void StartBatch(int models) {
+    batch_label_ = "fitting " + std::to_string(models) + (models == 1 ? " model in " : " models in ") +
+                   std::to_string(num_folds()) + (num_folds() == 1 ? " fold" : " folds");
+    batch_total_ = models * num_folds();
+    batch_done_ = 0;
+    if (progress_) progress_(batch_label_, 0, batch_total_);
+  }
+
   void Report() {
     std::lock_guard<std::mutex> lock(mutex_);
     ++refinements_;
-    if (progress_) progress_(refinements_);
+    if (progress_) progress_(batch_label_, ++batch_done_, batch_total_);
   }
 
   const DiagnosisOptions& options_;
@@ -162,6 +171,8 @@ class HeldOutEvaluator : public internal::ModelFitter {
   std::vector<std::array<bool, kNumWrenchComponents>> scored_;
   std::mutex mutex_;
   int refinements_ = 0;
+  std::string batch_label_;
+  int batch_done_ = 0, batch_total_ = 0;
 };
 
 // The verdict of a candidate whose inputs a log lacks (velocity, voltage, ...): unavailable for

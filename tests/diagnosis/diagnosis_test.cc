@@ -39,7 +39,33 @@ const EffectVerdict& VerdictOf(const Diagnosis& d, EffectKind kind) {
 TEST(DiagnosisTest, WithheldDelayIsRankedFirstAndItsSizeRecovered) {
   Effects withheld;
   withheld.Set("delay_s", 0.018);
-  const Diagnosis d = Diagnose({SimulatedFlight(45.0, 21, withheld)}, {}, TestOptions());
+  struct Call {
+    std::string batch;
+    int done, total;
+  };
+  std::vector<Call> calls;
+  const Diagnosis d = Diagnose({SimulatedFlight(45.0, 21, withheld)}, {}, TestOptions(),
+                               [&calls](const std::string& batch, int done, int total) {
+                                 calls.push_back({batch, done, total});
+                               });
+  // Progress: each batch of fold refinements counts from 0 to its total, models x 3 folds, and the
+  // batches add up to every refinement made.
+  int refinements = 0;
+  for (size_t k = 0; k < calls.size(); ++k) {
+    const bool starts = calls[k].done == 0;
+    if (starts) {
+      EXPECT_EQ(calls[k].total % 3, 0) << calls[k].batch;
+      EXPECT_NE(calls[k].batch.find("in 3 folds"), std::string::npos) << calls[k].batch;
+    } else {
+      EXPECT_EQ(calls[k].done, calls[k - 1].done + 1) << calls[k].batch;
+    }
+    if (k + 1 == calls.size() || calls[k + 1].done == 0) {
+      EXPECT_EQ(calls[k].done, calls[k].total) << calls[k].batch;
+      refinements += calls[k].total;
+    }
+  }
+  EXPECT_GT(refinements, 0);
+  EXPECT_EQ(refinements, d.refinements);
   ASSERT_FALSE(d.selected.empty()) << DiagnosisVerdict(d);
   EXPECT_EQ(d.selected.front(), ParseEffectKind("delay")) << DiagnosisVerdict(d);
   const EffectVerdict& first = d.ranking.front();

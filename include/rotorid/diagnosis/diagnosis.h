@@ -182,8 +182,10 @@ struct Diagnosis {
   std::vector<std::string> warnings;
 };
 
-// Called after each piece of work (refinement or fold identification) with the count done so far.
-using DiagnosisProgress = std::function<void(int done)>;
+// Progress of the fold refinements, the diagnosis's long work, batch by batch: `done` of the
+// `total` refinements of the current batch (every model it compares, in every fold), with a label
+// that names the batch ("fitting 8 models in 4 folds"). Called under a lock, one call at a time.
+using DiagnosisProgress = std::function<void(const std::string& batch, int done, int total)>;
 
 // Diagnoses the identification flights; `held_out` (may be empty) replaces the time-blocked folds.
 // Throws rotorid::Error on invalid options, when the linear model cannot be identified, or when a
