@@ -51,7 +51,7 @@ int DelayStudy(int flights, double seconds, const std::string& config) {
   double worst = 0.0;
   for (int flight = 1; flight <= flights; ++flight) {
     RandomStream random = EffectDrawStream(flight, {ParseEffectKind("delay")});
-    const double total_s = random.Uniform(options.min_s + 0.005, options.max_s - 0.005);
+    const double total_s = random.Uniform(options.search.min_s + 0.005, options.search.max_s - 0.005);
     SimulationOptions sim;
     sim.duration_s = seconds;
     sim.seed = 900 + flight;
@@ -78,7 +78,7 @@ int DelayStudy(int flights, double seconds, const std::string& config) {
     std::fflush(stdout);
   }
   std::printf("\n%d flights, delays drawn in [%.0f, %.0f] ms: %d within 2 ms, %d failed, largest error %.3f ms\n",
-              flights, 1e3 * options.min_s, 1e3 * options.max_s, within, failed, worst);
+              flights, 1e3 * options.search.min_s, 1e3 * options.search.max_s, within, failed, worst);
   return within == flights ? 0 : 1;
 }
 

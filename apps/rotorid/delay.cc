@@ -28,9 +28,9 @@ Command AddDelayCommand(CLI::App& root) {
                "the joint refinement");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
   AddIdentifyOptions(command.app, &options->identify);
-  command.app->add_option("--min-s", options->delay.min_s, "smallest delay searched (s)")->capture_default_str();
-  command.app->add_option("--max-s", options->delay.max_s, "largest delay searched (s)")->capture_default_str();
-  command.app->add_option("--step-s", options->delay.step_s, "grid step of the global search (s)")
+  command.app->add_option("--min-s", options->delay.search.min_s, "smallest delay searched (s)")->capture_default_str();
+  command.app->add_option("--max-s", options->delay.search.max_s, "largest delay searched (s)")->capture_default_str();
+  command.app->add_option("--step-s", options->delay.search.step_s, "grid step of the global search (s)")
       ->capture_default_str();
   command.app->add_flag("--with-motor-lag", options->delay.with_motor_lag, "estimate the motor time constant jointly");
   command.app->add_option("--threads", options->delay.num_threads)->capture_default_str();
@@ -49,7 +49,7 @@ Command AddDelayCommand(CLI::App& root) {
     for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)},
-                                     {"search_s", {options->delay.min_s, options->delay.max_s, options->delay.step_s}},
+                                     {"search_s", {options->delay.search.min_s, options->delay.search.max_s, options->delay.search.step_s}},
                                      {"with_motor_lag", options->delay.with_motor_lag}};
     nlohmann::json report = DelayJson(linear, estimate);
     report["rotorid_version"] = kRotoridVersion;
@@ -72,7 +72,7 @@ Command AddDelayCommand(CLI::App& root) {
     if (!options->flights.quiet) {
       std::cout << "rotorid delay: " << 1000 * estimate.delay_s << " ms +- " << 1000 * estimate.delay_std_s
                 << " ms (global search best " << 1000 * estimate.grid_best_s << " ms over ["
-                << 1000 * options->delay.min_s << ", " << 1000 * options->delay.max_s << "] ms)";
+                << 1000 * options->delay.search.min_s << ", " << 1000 * options->delay.search.max_s << "] ms)";
       if (options->delay.with_motor_lag)
         std::cout << "; motor time constant " << 1000 * estimate.motor_tau_s << " ms +- "
                   << 1000 * estimate.motor_tau_std_s << " ms";

@@ -32,8 +32,7 @@ std::string DiagnosisOptions::Validate() const {
   if (max_effects < 0) return "max_effects must not be negative";
   if (!(screen_fraction >= 0.0 && screen_fraction <= 1.0)) return "screen_fraction must lie in [0, 1]";
   if (!(rival_fraction >= 0.0 && rival_fraction <= 1.0)) return "rival_fraction must lie in [0, 1]";
-  if (!(delay_search_max_s > delay_search_min_s)) return "delay search range is empty";
-  if (!(delay_search_step_s > 0.0)) return "delay search step must be positive";
+  if (const std::string problem = delay_search.Validate(); !problem.empty()) return problem;
   if (refine_max_iterations < 1) return "refine_max_iterations must be at least 1";
   if (num_threads < 1) return "num_threads must be at least 1";
   return {};
@@ -108,6 +107,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
         refine.effects = KindsOf(masks[m]);
         refine.initial = initial[m][k];
         refine.coarse_delay_search = false;  // started from the diagnosis' own search
+        refine.delay_search = options_.delay_search;  // which also bounds the delay
         refine.compute_covariance = false;   // std come from the linearisation
         refine.max_iterations = options_.refine_max_iterations;
         refine.num_threads = 1;  // parallel over models and folds instead
@@ -257,6 +257,7 @@ RefineResult RefineOnAllData(const IdentificationResult& full, const ModelRecord
   refine.effects = KindsOf(kept.mask);
   refine.initial = internal::MeanFoldEffects(kept);
   refine.coarse_delay_search = false;
+  refine.delay_search = options.delay_search;
   refine.compute_covariance = false;
   refine.num_threads = options.num_threads;
   return Refine(full, refine);

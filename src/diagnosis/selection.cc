@@ -77,7 +77,7 @@ double PhaseTimer::SecondsSinceStart() const { return std::chrono::duration<doub
 std::vector<double> ScreeningGrid(EffectKind kind, const DiagnosisOptions& options) {
   std::vector<double> grid = kind->info().screening_grid;
   if (kind->info().grid_searched) {
-    const std::vector<double> search = SearchGrid(options.delay_search_min_s, options.delay_search_max_s, 0.01);
+    const std::vector<double> search = SearchGrid(options.delay_search.min_s, options.delay_search.max_s, 0.01);
     grid.insert(grid.end(), search.begin(), search.end());
   }
   return grid;
@@ -183,7 +183,7 @@ double CoarseDelay(const IdentificationResult& full, const DiagnosisOptions& opt
   const EffectKind searched =
       *std::find_if(AllEffects().begin(), AllEffects().end(), [](EffectKind k) { return k->info().grid_searched; });
   const std::vector<double> grid =
-      SearchGrid(options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s);
+      options.delay_search.Grid();
   const std::vector<double> criterion = CriterionOverGrid(full, Effects{}, searched, grid, options.num_threads);
   return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
 }

@@ -20,13 +20,21 @@
 
 namespace rotorid {
 
+std::vector<double> DelaySearch::Grid() const { return internal::SearchGrid(min_s, max_s, step_s); }
+
+std::string DelaySearch::Validate() const {
+  if (!(max_s > min_s)) return "delay search range is empty (max must exceed min)";
+  if (!(step_s > 0.0)) return "delay search step must be positive";
+  if ((max_s - min_s) / step_s > 5000) return "delay search grid has more than 5000 points; use a larger step";
+  return {};
+}
+
 std::string RefineOptions::Validate() const {
   if (robust_loss != "none" && robust_loss != "huber" && robust_loss != "cauchy")
     return "robust loss must be none, huber or cauchy, got '" + robust_loss + "'";
   if (!(robust_scale > 0.0)) return "robust loss scale must be positive";
   if (criterion != "anchored" && criterion != "tls") return "criterion must be anchored or tls, got '" + criterion + "'";
-  if (!(delay_search_max_s > delay_search_min_s)) return "delay search range is empty";
-  if (!(delay_search_step_s > 0.0)) return "delay search step must be positive";
+  if (const std::string problem = delay_search.Validate(); !problem.empty()) return problem;
   if (max_iterations < 1) return "max_iterations must be at least 1";
   for (EffectKind kind : AllEffects())
     if (kind->info().lower_bound == 0.0 && (initial.Get(kind).array() < 0.0).any())
@@ -239,7 +247,7 @@ double RefineScale(EffectKind kind) {
 // The bounds a refinement keeps an effect in: its physical range, or for a grid-searched effect
 // the search range.
 std::pair<double, double> RefineBounds(EffectKind kind, const RefineOptions& options) {
-  if (kind->info().grid_searched) return {options.delay_search_min_s, options.delay_search_max_s};
+  if (kind->info().grid_searched) return {options.delay_search.min_s, options.delay_search.max_s};
   return {kind->info().lower_bound, kind->info().upper_bound};
 }
 
@@ -504,7 +512,7 @@ std::vector<EffectKind> EffectsOnBound(const RefineResult& result, const RefineO
 
 double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind) {
   const std::vector<double> grid =
-      internal::SearchGrid(options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s);
+      options.delay_search.Grid();
   const std::vector<double> criterion =
       internal::CriterionOverGrid(linear, options.initial, kind, grid, options.num_threads);
   return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];

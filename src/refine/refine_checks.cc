@@ -76,7 +76,7 @@ std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEst
   if (!std::isfinite(estimate.delay_s) || !std::isfinite(estimate.delay_std_s) ||
       !std::isfinite(estimate.motor_tau_s) || !std::isfinite(estimate.motor_tau_std_s))
     checks.push_back({"effects_finite", CheckStatus::kError, "delay: the delay or its std is NaN or inf"});
-  if (OnBound(estimate.delay_s, options.min_s, options.max_s))
+  if (OnBound(estimate.delay_s, options.search.min_s, options.search.max_s))
     checks.push_back({"effects_on_bounds", CheckStatus::kWarning,
                       "delay: " + std::to_string(1000.0 * estimate.delay_s) +
                           " ms is on the edge of the searched range: widen --min-s/--max-s"});

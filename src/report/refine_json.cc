@@ -12,7 +12,7 @@ nlohmann::json RefineOptionsJson(const RefineOptions& options) {
   for (EffectKind k : options.effects) effects.push_back(EffectName(k));
   return {{"effects", effects},
           {"coarse_delay_search", options.coarse_delay_search},
-          {"delay_search_s", {options.delay_search_min_s, options.delay_search_max_s, options.delay_search_step_s}},
+          {"delay_search_s", {options.delay_search.min_s, options.delay_search.max_s, options.delay_search.step_s}},
           {"robust_loss", options.robust_loss},
           {"robust_scale", options.robust_scale},
           {"criterion", options.criterion},

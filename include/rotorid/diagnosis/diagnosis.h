@@ -27,6 +27,7 @@
 #include "rotorid/diagnosis/gap_location.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/model/effects.h"
+#include "rotorid/refine/refine.h"
 
 namespace rotorid {
 
@@ -56,10 +57,10 @@ struct DiagnosisOptions {
   double rival_fraction = 0.7;
   // Forward selection stops after this many effects.
   int max_effects = 3;
-  // Start of the delay (and lag) candidate in the folds: a coarse search of the TLS criterion.
-  double delay_search_min_s = -0.05;
-  double delay_search_max_s = 0.15;
-  double delay_search_step_s = 0.005;
+  // Start of the delay (and lag) candidate in the folds: a coarse search of the TLS criterion over
+  // this grid, which also bounds the delay in every refinement; its range in 10 ms steps is the
+  // delay's screening grid.
+  DelaySearch delay_search;
   // Ceres iterations per fold refinement (warm-started, they rarely need more; the nearly flat
   // delay/lag ridge is where more would be spent for no change of the criterion).
   int refine_max_iterations = 20;

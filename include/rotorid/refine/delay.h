@@ -12,9 +12,7 @@
 namespace rotorid {
 
 struct DelayOptions {
-  double min_s = -0.1;
-  double max_s = 0.2;
-  double step_s = 0.002;
+  DelaySearch search;
   // Estimate the motor time constant jointly (delay and lag are partly confounded).
   bool with_motor_lag = false;
   int num_threads = 2;

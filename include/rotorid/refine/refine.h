@@ -21,6 +21,20 @@
 
 namespace rotorid {
 
+// The global search of the command-to-IMU delay (the grid-searched effect) and the bounds a
+// refinement keeps it in: one range and step for refine, delay and diagnose, so that every command
+// searches the same delays and bounds the delay alike.
+struct DelaySearch {
+  double min_s = -0.1;
+  double max_s = 0.2;
+  double step_s = 0.004;
+
+  // min, min + step, ... up to max.
+  std::vector<double> Grid() const;
+  // Empty when valid, else a message naming the violated constraint.
+  std::string Validate() const;
+};
+
 struct RefineOptions {
   // Effects whose parameters are estimated; the others are held at their initial values.
   std::vector<EffectKind> effects = AllEffects();
@@ -29,9 +43,7 @@ struct RefineOptions {
   // Grid-searched effects (the delay) start from a global search of the TLS criterion over this
   // range, which also bounds them.
   bool coarse_delay_search = true;
-  double delay_search_min_s = -0.1;
-  double delay_search_max_s = 0.2;
-  double delay_search_step_s = 0.004;
+  DelaySearch delay_search;
   // Robust loss on the whitened residuals: "none", "huber" or "cauchy", with its scale.
   std::string robust_loss = "none";
   double robust_scale = 3.0;
