@@ -343,7 +343,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
                                                       evaluator.scales(), linearization, kept_kinds);
   internal::MarkConfounded(diagnosis.confounded, &verdicts);
   timer.Mark("confounding");
-  for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options);
+  for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options, diagnosis.selected);
   internal::AddBoundNotes(on_bound, &verdicts);
   diagnosis.ranking = internal::Rank(std::move(verdicts), diagnosis.selected, unavailable);
 

@@ -23,7 +23,9 @@ std::string DiagnosisVerdict(const Diagnosis& d) {
 
 namespace internal {
 
-std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options) {
+std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
+                        const std::vector<EffectKind>& selected) {
+  const std::string given = selected.empty() ? "" : " (with " + Join(selected) + " in the model)";
   std::ostringstream note;
   if (v.status == "selected") {
     note << "held-out gap shrinks " << std::fixed << std::setprecision(1) << v.test.shrink_pct << " %";
@@ -36,14 +38,14 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options)
   } else if (v.test.screened) {
     note << "not refined: its first-order in-sample shrink is only " << std::setprecision(2) << std::fixed
          << v.test.shrink_pct << " %; this data would reveal it above "
-         << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd());
+         << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd()) << given;
   } else if (v.status == "confounded") {
     note << "removes as much held-out residual as " << EffectName(v.confounded_with.front())
          << "; the data cannot tell them apart";
   } else {
     const Eigen::VectorXd ratio = v.value.cwiseAbs().cwiseQuotient(v.detectable_above.cwiseMax(1e-300));
     note << (ratio.maxCoeff() < 1.0 ? "not detected" : "not significant") << "; this data would reveal it above "
-         << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd());
+         << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd()) << given;
   }
   return note.str();
 }

@@ -13,7 +13,10 @@ namespace rotorid::internal {
 
 // The note of a verdict: why it was kept, dropped, not refined, confounded or not significant. A
 // kept effect's note is its held-out shrink; what the final fit says about it follows after "; ".
-std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options);
+// The size above which the data would reveal an absent effect is computed with the `selected`
+// effects in the model, and the note says so: another effect may hide part of it.
+std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
+                        const std::vector<EffectKind>& selected);
 
 // "motor_lag = 300 ms is on its upper bound (300 ms): the data push it further; treat it as
 // absorbing something else", for an effect that its refinement ended on a bound (RefineResult::

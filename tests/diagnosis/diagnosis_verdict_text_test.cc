@@ -35,6 +35,24 @@ TEST(OnBoundStatementTest, NamesTheEffectOrCoordinateAndItsBound) {
             "(2 m/s^2): the data push them further; treat them as absorbing something else");
 }
 
+// The detectable size of an absent effect is computed with the selected effects in the model; the
+// note says so, since they may hide part of it.
+TEST(VerdictNoteTest, DetectableSizeIsStatedGivenTheSelectedEffects) {
+  EffectVerdict v;
+  v.kind = kGyroBias;
+  v.status = "not significant";
+  v.value = Eigen::Vector3d(0.001, 0.0, 0.0);
+  v.detectable_above = Eigen::Vector3d(0.06, 0.06, 0.03);
+  const DiagnosisOptions options;
+  const std::string alone = VerdictNote(v, options, {});
+  EXPECT_NE(alone.find("not detected; this data would reveal it above"), std::string::npos) << alone;
+  EXPECT_EQ(alone.find("in the model"), std::string::npos) << alone;
+  const std::string given = VerdictNote(v, options, {kMotorLag, kAccBias});
+  EXPECT_NE(given.find("(with motor_lag, acc_bias in the model)"), std::string::npos) << given;
+  v.test.screened = true;  // not refined: the screening's note carries the same condition
+  EXPECT_NE(VerdictNote(v, options, {kDelay}).find("(with delay in the model)"), std::string::npos);
+}
+
 EffectVerdict Verdict(EffectKind kind, bool selected, const Eigen::VectorXd& value, const std::string& note) {
   EffectVerdict v;
   v.kind = kind;
