@@ -2,6 +2,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "rotorid/diagnosis/diagnosis_checks.h"
 #include "rotorid/refine/refine.h"
 #include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
@@ -34,6 +35,7 @@ Command AddIdentifyCommand(CLI::App& root) {
     const IdentificationResult result =
         IdentifyWithChecks(flights, identify, &checks, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
+    checks.push_back(CheckResidualSignature(result));
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)}};
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},

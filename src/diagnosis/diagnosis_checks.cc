@@ -1,5 +1,12 @@
 #include "rotorid/diagnosis/diagnosis_checks.h"
 
+#include <algorithm>
+
+#include "diagnosis/held_out.h"
+#include "diagnosis/linearization.h"
+#include "rotorid/core/text.h"
+#include "rotorid/refine/refine.h"
+
 namespace rotorid {
 namespace {
 
@@ -29,6 +36,67 @@ std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<
   append(CheckRelativeError(diagnosis.baseline.relative_error_pct, "held-out linear", /*held_out=*/true));
   append(CheckRelativeError(diagnosis.final_gap.relative_error_pct, "held-out final", /*held_out=*/true));
   return checks;
+}
+
+Check CheckResidualSignature(const IdentificationResult& linear, const DiagnosisOptions& options,
+                             double min_shrink_pct) {
+  std::vector<EffectKind> candidates;
+  for (EffectKind kind : options.candidates) {
+    bool available = kind->FixedDimension() > 0;
+    for (const ProcessedFlight& flight : linear.flights) available = available && kind->Unavailable(flight.inputs()).empty();
+    if (available) candidates.push_back(kind);
+  }
+  const internal::EffectLinearization linearization =
+      internal::LinearizeEffects(linear.flights, NamedParameters(linear.system, linear.solution.chi),
+                                 internal::EssentialParameterNames(linear), Effects{}, candidates);
+  // In-sample forward selection to first order: the effect that removes the most, then what each
+  // further one adds on top, while that is at least min_shrink_pct and significant. An effect that
+  // stands in for part of another (an acc delay for part of a lag) adds little once that one is in.
+  std::vector<EffectKind> shown;
+  std::vector<std::string> parts;
+  double shown_shrink = 0.0;
+  for (;;) {
+    EffectKind best = nullptr;
+    EffectTest best_test;
+    std::vector<EffectKind> rivals;  // fit as well as the best, within a tenth of its shrink
+    std::vector<std::pair<EffectKind, double>> added;
+    for (EffectKind kind : candidates) {
+      if (std::find(shown.begin(), shown.end(), kind) != shown.end()) continue;
+      std::vector<EffectKind> subset = shown;
+      subset.push_back(kind);
+      const internal::EffectSubsetFit fit = internal::FitEffectSubset(linearization, subset);
+      const EffectTest test = internal::ScreeningTest(fit.predicted_shrink - shown_shrink, EffectDimension(kind),
+                                                      fit.effective_samples, linearization.scored_rows);
+      added.emplace_back(kind, test.shrink_pct);
+      if (!best || test.shrink_pct > best_test.shrink_pct) {
+        best = kind;
+        best_test = test;
+      }
+    }
+    if (!best || best_test.shrink_pct < min_shrink_pct || !(best_test.p_value < options.alpha)) break;
+    for (const auto& [kind, shrink] : added)
+      if (kind != best && shrink >= 0.9 * best_test.shrink_pct) rivals.push_back(kind);
+    std::string part = best->name() + " (" + FormatValue("%.0f", best_test.shrink_pct) + " %";
+    for (EffectKind rival : rivals) part += "; " + rival->name() + " fits as well";
+    parts.push_back(part + ")");
+    shown.push_back(best);
+    shown_shrink += best_test.shrink_pct / 100.0;
+  }
+  if (shown.empty())
+    return {"residual_signature", CheckStatus::kOk,
+            "the residual shows no candidate effect's signature (none removes " + ShortNumber(min_shrink_pct) +
+                " % of it to first order)"};
+  std::string effects, names;
+  for (size_t k = 0; k < shown.size(); ++k) {
+    effects += (k == 0 ? "" : ", then ") + parts[k];
+    names += (k == 0 ? "" : ",") + shown[k]->name();
+  }
+  return {"residual_signature", CheckStatus::kWarning,
+          "the residual shows the signature of " + effects +
+              ": the share of the in-sample residual a first-order fit removes, each on top of the ones before; "
+              "`rotorid refine --effects " +
+              names + "` estimates " + (shown.size() == 1 ? "it" : "them") +
+              " with the parameters, `rotorid diagnose` tests " + (shown.size() == 1 ? "it" : "them") + " on held-out data"};
 }
 
 }  // namespace rotorid

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "rotorid/core/error.h"
+#include "rotorid/diagnosis/diagnosis_checks.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/sim/presets.h"
@@ -221,6 +222,29 @@ TEST(DiagnosisTest, RejectsInvalidOptionsAndForeignHeldOutFlights) {
   DiagnosisOptions fast;
   fast.candidates = {ParseEffectKind("acc_bias")};
   EXPECT_THROW(Diagnose({flight}, {foreign}, fast), Error);
+}
+
+// identify's hint: the linear model's residual names the effect a flight carries (to first order,
+// in sample), the strongest first, and stays quiet on a clean flight.
+TEST(ResidualSignatureTest, NamesTheEffectAFlightCarriesAndNothingOnACleanOne) {
+  auto check_of = [](const Effects& effects) {
+    const SimulationResult sim = testing::SimulatePreset("B", 30.0, 41, effects);
+    return CheckResidualSignature(testing::IdentifySimulated(sim));
+  };
+  const Check clean = check_of(Effects{});
+  EXPECT_EQ(clean.status, CheckStatus::kOk) << clean.message;
+  Effects lag;
+  lag.Set("motor_tau_s", 0.04);
+  const Check with_lag = check_of(lag);
+  EXPECT_EQ(with_lag.status, CheckStatus::kWarning);
+  // The lag first; a delay fits it as well (the diagnosis's held-out test tells them apart).
+  EXPECT_EQ(with_lag.message.find("the residual shows the signature of motor_lag ("), 0u) << with_lag.message;
+  EXPECT_NE(with_lag.message.find("--effects motor_lag` estimates it"), std::string::npos) << with_lag.message;
+  Effects bias;
+  bias.Set("acc_bias", Eigen::Vector3d(0.3, -0.2, 0.2));
+  const Check with_bias = check_of(bias);
+  EXPECT_EQ(with_bias.status, CheckStatus::kWarning);
+  EXPECT_EQ(with_bias.message.find("the residual shows the signature of acc_bias ("), 0u) << with_bias.message;
 }
 
 }  // namespace

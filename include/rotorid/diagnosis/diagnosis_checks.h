@@ -11,4 +11,13 @@ namespace rotorid {
 // parameters (values only: the diagnosis keeps no std), finite effects, held-out Table III.
 std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs);
 
+// Whether the linear model's residual shows the signature of an unmodelled effect: each candidate
+// of `options` that the flights can carry is fitted alone to first order at the TLS solution (the
+// essential parameters profiled out, as the diagnosis screens), and one whose fit removes at least
+// `min_shrink_pct` of the in-sample residual at the diagnosis' significance level is named, with
+// the commands that test it ("residual_signature", a warning; ok when none shows). A first-order
+// fit understates large delays and lags: the shrink it gives is a lower bound.
+Check CheckResidualSignature(const IdentificationResult& linear, const DiagnosisOptions& options = {},
+                             double min_shrink_pct = 5.0);
+
 }  // namespace rotorid
