@@ -28,18 +28,17 @@ int ColumnOf(const std::string& name, const Vehicle& vehicle) {
   return -1;
 }
 
-// (J^T J)^+ with the columns equilibrated first, so that the pseudo-inverse threshold is relative
-// to each column's own scale.
-Eigen::MatrixXd NormalInverse(const Eigen::MatrixXd& j) {
-  const Eigen::Index n = j.cols();
+// (J^T J)^+ from the Gram matrix J^T J, with the columns equilibrated first, so that the
+// pseudo-inverse threshold is relative to each column's own scale.
+Eigen::MatrixXd NormalInverse(const Eigen::MatrixXd& gram) {
+  const Eigen::Index n = gram.cols();
   if (n == 0) return Eigen::MatrixXd(0, 0);
   Eigen::VectorXd inverse_norm(n);
   for (Eigen::Index c = 0; c < n; ++c) {
-    const double norm = j.col(c).norm();
+    const double norm = std::sqrt(std::max(gram(c, c), 0.0));
     inverse_norm[c] = norm > 0.0 ? 1.0 / norm : 0.0;
   }
-  const Eigen::MatrixXd scaled = j * inverse_norm.asDiagonal();
-  const Eigen::MatrixXd normal = scaled.transpose() * scaled;
+  const Eigen::MatrixXd normal = inverse_norm.asDiagonal() * gram * inverse_norm.asDiagonal();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
   const Eigen::VectorXd values = eigen.eigenvalues();
   const double threshold = 1e-12 * std::max(values.maxCoeff(), 1e-300);
@@ -167,33 +166,37 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     ++scored_components;
   }
   out.autocorrelation_factor = scored_components > 0 ? factor / scored_components : 1.0;
+  Eigen::MatrixXd j(out.residual.size(), p + e);
+  j << out.parameter_jacobian, out.effect_jacobian;
+  out.gram = j.transpose() * j;
+  out.gram_residual = j.transpose() * out.residual;
+  out.residual_ssr = out.residual.squaredNorm();
   return out;
 }
 
 EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const std::vector<EffectKind>& subset) {
-  std::vector<Eigen::Index> columns;
+  const Eigen::Index p = linearization.parameter_jacobian.cols(), n = linearization.scored_rows;
+  std::vector<Eigen::Index> chi(static_cast<size_t>(p)), effect;  // columns of the Gram matrix
+  for (Eigen::Index c = 0; c < p; ++c) chi[static_cast<size_t>(c)] = c;
   EffectSubsetFit fit;
   for (size_t c = 0; c < linearization.labels.size(); ++c) {
     const EffectKind kind = linearization.kinds[linearization.column_kind[c]];
     if (std::find(subset.begin(), subset.end(), kind) == subset.end()) continue;
-    columns.push_back(static_cast<Eigen::Index>(c));
+    effect.push_back(p + static_cast<Eigen::Index>(c));
     fit.labels.push_back(linearization.labels[c]);
     fit.column_kind.push_back(kind);
   }
-  const Eigen::MatrixXd& chi_columns = linearization.parameter_jacobian;
-  const Eigen::VectorXd& r = linearization.residual;
-  const Eigen::Index n = linearization.scored_rows, p = chi_columns.cols(),
-                     e = static_cast<Eigen::Index>(columns.size());
-  Eigen::MatrixXd effect_columns(r.size(), e);
-  for (Eigen::Index c = 0; c < e; ++c) effect_columns.col(c) = linearization.effect_jacobian.col(columns[c]);
-  Eigen::MatrixXd j(r.size(), p + e);
-  j << chi_columns, effect_columns;
+  const Eigen::Index e = static_cast<Eigen::Index>(effect.size());
+  std::vector<Eigen::Index> all = chi;
+  all.insert(all.end(), effect.begin(), effect.end());
+  const Eigen::MatrixXd& gram = linearization.gram;
+  const Eigen::VectorXd& g = linearization.gram_residual;
 
-  const Eigen::MatrixXd covariance_unit = NormalInverse(j);
-  const Eigen::MatrixXd chi_inverse = NormalInverse(chi_columns);
-  const Eigen::VectorXd gradient = j.transpose() * r;
-  const Eigen::VectorXd chi_gradient = chi_columns.transpose() * r;
-  const double ssr = r.squaredNorm();
+  const Eigen::MatrixXd covariance_unit = NormalInverse(gram(all, all));
+  const Eigen::MatrixXd chi_inverse = NormalInverse(gram(chi, chi));
+  const Eigen::VectorXd gradient = g(all);
+  const Eigen::VectorXd chi_gradient = g(chi);
+  const double ssr = linearization.residual_ssr;
   const double removed = gradient.dot(covariance_unit * gradient) - chi_gradient.dot(chi_inverse * chi_gradient);
   fit.predicted_shrink = ssr > 0.0 ? std::max(0.0, removed) / ssr : 0.0;
   fit.step = -(covariance_unit * gradient).tail(e);
@@ -204,14 +207,17 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
   const Eigen::VectorXd inverse_std = fit.std.unaryExpr([](double s) { return s > 0.0 ? 1.0 / s : 0.0; });
   fit.correlation = inverse_std.asDiagonal() * effect_cov * inverse_std.asDiagonal();
   fit.effective_samples = static_cast<double>(n) / linearization.autocorrelation_factor;
-  // Signatures with chi projected out.
-  const Eigen::MatrixXd projected =
-      effect_columns - chi_columns * (chi_inverse * (chi_columns.transpose() * effect_columns));
+  // Signatures with chi projected out, E - P M with M = (P^T P)^+ P^T E, from the Gram blocks.
+  const Eigen::MatrixXd chi_effect = gram(chi, effect);
+  const Eigen::MatrixXd m = chi_inverse * chi_effect;
+  const Eigen::VectorXd projected_dot_r = g(effect) - m.transpose() * chi_gradient;
+  const Eigen::MatrixXd projected_gram =
+      gram(effect, effect) - chi_effect.transpose() * m - m.transpose() * chi_effect + m.transpose() * gram(chi, chi) * m;
   fit.residual_correlation.resize(e);
-  const double r_norm = r.norm();
+  const double r_norm = std::sqrt(ssr);
   for (Eigen::Index c = 0; c < e; ++c) {
-    const double norm = projected.col(c).norm() * r_norm;
-    fit.residual_correlation[c] = norm > 0.0 ? projected.col(c).dot(r) / norm : 0.0;
+    const double norm = std::sqrt(std::max(projected_gram(c, c), 0.0)) * r_norm;
+    fit.residual_correlation[c] = norm > 0.0 ? projected_dot_r[c] / norm : 0.0;
   }
   return fit;
 }

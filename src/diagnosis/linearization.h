@@ -51,6 +51,11 @@ struct EffectLinearization {
   // discarded; not Fx, Fy) get none, as in the held-out score.
   Eigen::Index scored_rows = 0;
   double autocorrelation_factor = 1.0;  // of the scaled residual
+  // The normal equations of [parameter_jacobian effect_jacobian]: its Gram matrix, the product with
+  // the residual and the residual's square norm, from which every subset fit is a small solve.
+  Eigen::MatrixXd gram;
+  Eigen::VectorXd gram_residual;
+  double residual_ssr = 0.0;
 };
 
 // Linearises the model of `flights` at (parameters, effects): chi columns for `free_parameters`
