@@ -151,6 +151,19 @@ TEST_F(CliWorkflowTest, AblateAndDelayWriteTheirReports) {
   EXPECT_NE(Slurp(Path("report_ablate") + "/report.html").find("lowest BIC"), std::string::npos);
 }
 
+// validate --report: the saved parameters applied to the given flights (it failed on a missing key
+// of the saved report until the report took typed results).
+TEST_F(CliWorkflowTest, ValidateWritesItsReport) {
+  ASSERT_EQ(RunRotorid(Args({"identify", "--json", Path("params.json"), "-q"})).exit_code, 0);
+  const std::string folder = Path("report_validate");
+  const auto r = RunRotorid(Args({"validate", "--params", Path("params.json"), "--report", folder}));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("report: " + folder + "/report.html"), std::string::npos) << r.out;
+  const std::string html = Slurp(folder + "/report.html");
+  EXPECT_NE(html.find("rotorid validate"), std::string::npos);
+  EXPECT_NE(html.find("kt"), std::string::npos);
+}
+
 TEST_F(CliWorkflowTest, ConfigFileGivesOptionsAndIsRecorded) {
   std::ofstream(Path("run.yaml")) << "vehicle: [" << Path("B.yaml") << "]\nlog: [" << Path("f.csv")
                                   << "]\nwindow: [\"2,18\"]\ncutoff-hz: 8\nsegment: none\nall-parameters: true\n";
