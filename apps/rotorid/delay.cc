@@ -24,8 +24,9 @@ Command AddDelayCommand(CLI::App& root) {
   auto options = std::make_shared<Options>();
   Command command;
   command.app = root.add_subcommand(
-      "delay", "estimates the command-to-IMU delay of a log with its std: a global search of the TLS criterion, then "
-               "the joint refinement");
+      "delay",
+      "estimates the command-to-IMU delay of a log with its std: a global search of the TLS criterion, then "
+      "the joint refinement");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
   AddIdentifyOptions(command.app, &options->identify);
   command.app->add_option("--min-s", options->delay.search.min_s, "smallest delay searched (s)")->capture_default_str();
@@ -47,10 +48,11 @@ Command AddDelayCommand(CLI::App& root) {
         EstimateDelay(linear, options->delay, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     for (Check& c : CheckDelay(linear, estimate, options->delay)) checks.push_back(std::move(c));
-    const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
-                                     {"tls", TlsOptionsJson(identify.tls)},
-                                     {"search_s", {options->delay.search.min_s, options->delay.search.max_s, options->delay.search.step_s}},
-                                     {"with_motor_lag", options->delay.with_motor_lag}};
+    const nlohmann::json settings = {
+        {"observation", ObservationOptionsJson(identify.observation)},
+        {"tls", TlsOptionsJson(identify.tls)},
+        {"search_s", {options->delay.search.min_s, options->delay.search.max_s, options->delay.search.step_s}},
+        {"with_motor_lag", options->delay.with_motor_lag}};
     nlohmann::json report = DelayJson(linear, estimate);
     report["rotorid_version"] = kRotoridVersion;
     report["command"] = "delay";

@@ -24,9 +24,10 @@ Command AddDiagnoseCommand(CLI::App& root) {
   auto options = std::make_shared<Options>();
   Command command;
   command.app = root.add_subcommand(
-      "diagnose", "the sim-to-real gap: where the model's residual lies (component, frequency band, stretch of the "
-                  "flight), which unmodelled effect causes it (judged on held-out data) and how far the held-out gap "
-                  "shrinks once it is added");
+      "diagnose",
+      "the sim-to-real gap: where the model's residual lies (component, frequency band, stretch of the "
+      "flight), which unmodelled effect causes it (judged on held-out data) and how far the held-out gap "
+      "shrinks once it is added");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
   AddIdentifyOptions(command.app, &options->identify);
   DiagnosisOptions& d = options->diagnosis;
@@ -34,16 +35,16 @@ Command AddDiagnoseCommand(CLI::App& root) {
   for (EffectKind kind : AllEffects()) names += (names.empty() ? "" : ",") + kind->name();
   std::string in_all;
   for (EffectKind kind : DefaultCandidates()) in_all += (in_all.empty() ? "" : ",") + kind->name();
-  command.app->add_option("--effects", options->effects,
-                          "candidate effects: all (" + in_all + ") or a list of " + names)
+  command.app
+      ->add_option("--effects", options->effects, "candidate effects: all (" + in_all + ") or a list of " + names)
       ->capture_default_str();
   command.app->add_option("--folds", d.folds, "time-blocked held-out folds per flight (without --validate-log)")
       ->capture_default_str();
   command.app->add_option("--guard-s", d.guard_s, "seconds left out of the training data around a held-out block")
       ->capture_default_str();
   command.app->add_option("--alpha", d.alpha, "level of the F-test of each added effect")->capture_default_str();
-  command.app->add_option("--min-shrink", d.min_shrink_pct,
-                          "held-out gap reduction (%) an effect must exceed to be kept")
+  command.app
+      ->add_option("--min-shrink", d.min_shrink_pct, "held-out gap reduction (%) an effect must exceed to be kept")
       ->capture_default_str();
   command.app->add_option("--max-effects", d.max_effects, "most effects the forward selection keeps")
       ->capture_default_str();
@@ -97,8 +98,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
     report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, training, &validation, &report);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
-    ReportInput input =
-        CommandReportInput("diagnose", diagnosis.identify.observation, training, &validation, settings);
+    ReportInput input = CommandReportInput("diagnose", diagnosis.identify.observation, training, &validation, settings);
     input.diagnosis = &result;
     input.checks = checks;
     input.flights = ReportFlights(flights, /*held_out=*/false);

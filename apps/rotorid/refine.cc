@@ -121,8 +121,8 @@ Command AddRefineCommand(CLI::App& root) {
     if (!options->flights.validate_log_paths.empty()) {
       held_out = ProcessFlights(validation.flights, identify.observation);
       held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
-      held_out_refined = RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi),
-                                                  refined.effects);
+      held_out_refined =
+          RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi), refined.effects);
       for (Check& c : CheckRelativeError(held_out_refined, "held-out refined", /*held_out=*/true))
         checks.push_back(std::move(c));
       report["held_out"] = {{"linear", {{"relative_error_pct", ComponentsJson(held_out_linear)}}},

@@ -43,7 +43,8 @@ Check CheckResidualSignature(const IdentificationResult& linear, const Diagnosis
   std::vector<EffectKind> candidates;
   for (EffectKind kind : options.candidates) {
     bool available = kind->FixedDimension() > 0;
-    for (const ProcessedFlight& flight : linear.flights) available = available && kind->Unavailable(flight.inputs()).empty();
+    for (const ProcessedFlight& flight : linear.flights)
+      available = available && kind->Unavailable(flight.inputs()).empty();
     if (available) candidates.push_back(kind);
   }
   const internal::EffectLinearization linearization =
@@ -96,7 +97,8 @@ Check CheckResidualSignature(const IdentificationResult& linear, const Diagnosis
               ": the share of the in-sample residual a first-order fit removes, each on top of the ones before; "
               "`rotorid refine --effects " +
               names + "` estimates " + (shown.size() == 1 ? "it" : "them") +
-              " with the parameters, `rotorid diagnose` tests " + (shown.size() == 1 ? "it" : "them") + " on held-out data"};
+              " with the parameters, `rotorid diagnose` tests " + (shown.size() == 1 ? "it" : "them") +
+              " on held-out data"};
 }
 
 }  // namespace rotorid

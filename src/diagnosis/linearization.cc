@@ -211,8 +211,8 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
   const Eigen::MatrixXd chi_effect = gram(chi, effect);
   const Eigen::MatrixXd m = chi_inverse * chi_effect;
   const Eigen::VectorXd projected_dot_r = g(effect) - m.transpose() * chi_gradient;
-  const Eigen::MatrixXd projected_gram =
-      gram(effect, effect) - chi_effect.transpose() * m - m.transpose() * chi_effect + m.transpose() * gram(chi, chi) * m;
+  const Eigen::MatrixXd projected_gram = gram(effect, effect) - chi_effect.transpose() * m -
+                                         m.transpose() * chi_effect + m.transpose() * gram(chi, chi) * m;
   fit.residual_correlation.resize(e);
   const double r_norm = std::sqrt(ssr);
   for (Eigen::Index c = 0; c < e; ++c) {

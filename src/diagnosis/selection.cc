@@ -88,7 +88,7 @@ namespace {
 // Best in-sample shrink (fraction of the TLS criterion) of a strongly nonlinear candidate over its
 // screening grid, on top of `base` effects.
 double GridShrinkFraction(const IdentificationResult& full, const Effects& base, EffectKind kind,
-                     const DiagnosisOptions& options) {
+                          const DiagnosisOptions& options) {
   const std::vector<double> grid = ScreeningGrid(kind, options);
   const double without = EffectCriterion(full, base);
   if (!(without > 0.0)) return 0.0;
@@ -182,8 +182,7 @@ namespace {
 double CoarseDelay(const IdentificationResult& full, const DiagnosisOptions& options) {
   const EffectKind searched =
       *std::find_if(AllEffects().begin(), AllEffects().end(), [](EffectKind k) { return k->info().grid_searched; });
-  const std::vector<double> grid =
-      options.delay_search.Grid();
+  const std::vector<double> grid = options.delay_search.Grid();
   const std::vector<double> criterion = CriterionOverGrid(full, Effects{}, searched, grid, options.num_threads);
   return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
 }

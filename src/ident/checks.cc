@@ -140,8 +140,8 @@ Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, cons
   if (gyro_ratio >= t.gravity_ratio_low && gyro_ratio <= t.gravity_ratio_high)
     cause = "the gyro and accelerometer columns appear swapped: exchange gyro_x..z and acc_x..z";
   else if (std::abs(m.acc_median - 1.0) < 0.3)
-    cause =
-        "the accelerometer appears to be in g: multiply acc_x..z by " + ShortNumber(m.gravity) + " (a column map: unit g)";
+    cause = "the accelerometer appears to be in g: multiply acc_x..z by " + ShortNumber(m.gravity) +
+            " (a column map: unit g)";
   else if (std::abs(m.acc_median / 1000.0 - 1.0) < 0.3)
     cause = "the accelerometer appears to be in mg: multiply acc_x..z by " + ShortNumber(m.gravity / 1000.0);
   else
@@ -150,8 +150,8 @@ Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, cons
 }
 
 Check MotionCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
-  const std::string measured = "RMS angular velocity " + ShortNumber(m.angular_velocity_rms) + " rad/s, thrust variation " +
-                               ShortNumber(m.thrust_variation_pct) + " %";
+  const std::string measured = "RMS angular velocity " + ShortNumber(m.angular_velocity_rms) +
+                               " rad/s, thrust variation " + ShortNumber(m.thrust_variation_pct) + " %";
   if (m.thrust_mean <= 0.0)
     return {"motion", CheckStatus::kError, source + ": the rotors never turn (all rotor columns 0): " + measured};
   if (m.angular_velocity_rms < t.motionless_angular_velocity_radps &&
@@ -194,7 +194,8 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   };
   const double mass = v.mass_kg, thrust = m.thrust_mean;
   const std::string measured =
-      "mass " + ShortNumber(mass) + " kg, arm " + ShortNumber(r) + " m: m/r^3 " + ShortNumber(density(mass, r)) + " kg/m^3" +
+      "mass " + ShortNumber(mass) + " kg, arm " + ShortNumber(r) + " m: m/r^3 " + ShortNumber(density(mass, r)) +
+      " kg/m^3" +
       (m.rotor_is_speed ? ", kt from hover " + ShortNumber(mass * m.gravity / thrust) +
                               " N s^2 = " + ShortNumber(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)"
                         : "");
@@ -229,8 +230,8 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
   std::iota(order.begin(), order.end(), 0);
   const Eigen::MatrixXd predicted = PredictedPattern(v, order);
   const Eigen::Vector3d c = PatternCorrelation(m.moment_pattern, predicted);
-  const std::string measured = "correlation of the rotor moments with " + VehicleFile(v) + ": roll " + ShortNumber(c[0]) +
-                               ", pitch " + ShortNumber(c[1]) + ", yaw " + ShortNumber(c[2]);
+  const std::string measured = "correlation of the rotor moments with " + VehicleFile(v) + ": roll " +
+                               ShortNumber(c[0]) + ", pitch " + ShortNumber(c[1]) + ", yaw " + ShortNumber(c[2]);
   std::vector<Check> checks;
   const double ok = t.pattern_correlation_ok;
   if (std::min(c[0], c[1]) >= ok) {

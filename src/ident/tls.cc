@@ -76,7 +76,8 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
     for (const Eigen::MatrixXd& cov : IdimNoiseCovariance(flights[f])) {
       Eigen::MatrixXd mapped = Eigen::MatrixXd::Zero(p + 1, p + 1);
       for (int a = 0; a < kNumIdimColumns; ++a)
-        for (int b = 0; b < kNumIdimColumns; ++b) mapped(system.SystemColumn(c, a), system.SystemColumn(c, b)) += cov(a, b);
+        for (int b = 0; b < kNumIdimColumns; ++b)
+          mapped(system.SystemColumn(c, a), system.SystemColumn(c, b)) += cov(a, b);
       system.group_noise_cov.push_back(mapped);
     }
   }

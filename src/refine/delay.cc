@@ -51,8 +51,9 @@ DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptio
   const size_t best = std::min_element(out.criterion.begin(), out.criterion.end()) - out.criterion.begin();
   out.grid_best_s = out.grid_s[best];
   if (best == 0 || best + 1 == out.grid_s.size())
-    out.warnings.push_back("the best delay lies at the edge of the searched range [" + std::to_string(options.search.min_s) +
-                           ", " + std::to_string(options.search.max_s) + "] s; widen it");
+    out.warnings.push_back("the best delay lies at the edge of the searched range [" +
+                           std::to_string(options.search.min_s) + ", " + std::to_string(options.search.max_s) +
+                           "] s; widen it");
   const RefineOptions refine = DelayRefinement(options, out.grid_best_s);
   const EffectKind lag = ParseEffectKind("motor_lag");
   const int total_steps = DelaySteps(options);

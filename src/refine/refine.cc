@@ -33,7 +33,8 @@ std::string RefineOptions::Validate() const {
   if (robust_loss != "none" && robust_loss != "huber" && robust_loss != "cauchy")
     return "robust loss must be none, huber or cauchy, got '" + robust_loss + "'";
   if (!(robust_scale > 0.0)) return "robust loss scale must be positive";
-  if (criterion != "anchored" && criterion != "tls") return "criterion must be anchored or tls, got '" + criterion + "'";
+  if (criterion != "anchored" && criterion != "tls")
+    return "criterion must be anchored or tls, got '" + criterion + "'";
   if (const std::string problem = delay_search.Validate(); !problem.empty()) return problem;
   if (max_iterations < 1) return "max_iterations must be at least 1";
   for (EffectKind kind : AllEffects())
@@ -193,8 +194,8 @@ std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(ceres::Problem* proble
   Eigen::MatrixXd discarded(jac.rows(), static_cast<Eigen::Index>(fixed.size()));
   for (size_t k = 0; k < fixed.size(); ++k) {
     const double norm = jac.col(fixed[k]).norm();
-    discarded.col(static_cast<Eigen::Index>(k)) = norm > 0.0 ? Eigen::VectorXd(jac.col(fixed[k]) / norm)
-                                                             : Eigen::VectorXd::Zero(jac.rows());
+    discarded.col(static_cast<Eigen::Index>(k)) =
+        norm > 0.0 ? Eigen::VectorXd(jac.col(fixed[k]) / norm) : Eigen::VectorXd::Zero(jac.rows());
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(discarded);
   std::vector<RestingOnDiscarded> found;
@@ -339,9 +340,9 @@ void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
       ep->problem->SetParameterUpperBound(values, static_cast<int>(a), upper / ep->effect_blocks.Scale(b));
     }
     if (ep->effect_blocks.free[b]->info().zero_sum)
-      ep->problem->AddResidualBlock(new ZeroSumResidual(static_cast<int>(ep->effect_values[b].size()),
-                                                        100.0 * std::sqrt(ep->context.total_rows)),
-                                    nullptr, values);
+      ep->problem->AddResidualBlock(
+          new ZeroSumResidual(static_cast<int>(ep->effect_values[b].size()), 100.0 * std::sqrt(ep->context.total_rows)),
+          nullptr, values);
   }
 }
 
@@ -384,8 +385,8 @@ void NoteEffectsRestingOnDiscarded(EffectProblem* ep, const IdimSystem& system,
                                    const std::vector<std::string>& effect_labels, RefineResult* result) {
   std::vector<double*> effect_block_pointers;
   for (Eigen::VectorXd& v : ep->effect_values) effect_block_pointers.push_back(v.data());
-  for (const RestingOnDiscarded& r : EffectsRestingOnDiscarded(ep->problem.get(), ep->scaled_chi.data(),
-                                                               effect_block_pointers, system, ep->fixed, effect_labels)) {
+  for (const RestingOnDiscarded& r : EffectsRestingOnDiscarded(
+           ep->problem.get(), ep->scaled_chi.data(), effect_block_pointers, system, ep->fixed, effect_labels)) {
     result->resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
     char share[32];
     std::snprintf(share, sizeof share, "%.1f %%", 100.0 * r.explained);
@@ -443,8 +444,9 @@ void ComputeRefinedCovariance(EffectProblem* ep, const IdimSystem& system, doubl
   int e = 0;
   for (size_t b = 0; b < ep->effect_blocks.free.size(); ++b) {
     const Eigen::Index size = ep->effect_values[b].size();
-    result->effects_std.Set(ep->effect_blocks.free[b],
-                            ep->effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
+    result->effects_std.Set(
+        ep->effect_blocks.free[b],
+        ep->effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
     e += static_cast<int>(size);
   }
   result->effect_labels = effect_labels;
@@ -511,8 +513,7 @@ std::vector<EffectKind> EffectsOnBound(const RefineResult& result, const RefineO
 }  // namespace
 
 double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind) {
-  const std::vector<double> grid =
-      options.delay_search.Grid();
+  const std::vector<double> grid = options.delay_search.Grid();
   const std::vector<double> criterion =
       internal::CriterionOverGrid(linear, options.initial, kind, grid, options.num_threads);
   return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];

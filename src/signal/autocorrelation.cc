@@ -36,7 +36,8 @@ double AutocorrelationFactor(const std::vector<Eigen::VectorXd>& series, Eigen::
   const Eigen::Index lag = std::min(2 * FirstLagBelow(series, 0.1, std::min(max_lag, max_search_lag)), max_lag);
   double factor = 1.0;
   for (Eigen::Index l = 1; l <= lag; ++l)
-    factor += 2.0 * (1.0 - static_cast<double>(l) / static_cast<double>(lag + 1)) * PooledAutocovariance(series, l) / c0;
+    factor +=
+        2.0 * (1.0 - static_cast<double>(l) / static_cast<double>(lag + 1)) * PooledAutocovariance(series, l) / c0;
   return std::max(factor, 1.0);
 }
 
