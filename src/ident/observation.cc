@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "rotorid/core/error.h"
+#include "rotorid/model/effects.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/signal/differentiate.h"
@@ -77,14 +78,31 @@ std::pair<int, int> GapFreeRange(const FlightLog& log, double dt, double edge_s)
     } else {
       throw Error(log.source + ": the time jumps by " + std::to_string(gap) + " s (" +
                   std::to_string(static_cast<long long>(std::llround(std::min(gap / dt, 1e18)))) +
-                  " sample intervals) from t = " + std::to_string(log.t_s[i - 1]) + " s to t = " +
-                  std::to_string(log.t_s[i]) + " s (data row " + std::to_string(i + 1) +
+                  " sample intervals) from t = " + std::to_string(log.t_s[i - 1]) +
+                  " s to t = " + std::to_string(log.t_s[i]) + " s (data row " + std::to_string(i + 1) +
                   "); rotorid does not interpolate across gaps longer than " +
                   std::to_string(static_cast<int>(kMaxGapIntervals)) +
                   " samples: use the parts before and after it as separate flights (--window)");
     }
   }
   return {begin, end};
+}
+
+// The IMU data corrected by the effects the vehicle file gives known values of (a known lever arm),
+// with the filtered rates, as the refinement corrects them by its estimated effects.
+void CorrectByKnownEffects(const Vehicle& vehicle, ProcessedFlight* flight) {
+  const EffectChain chain = ActingEffects(KnownEffects(vehicle), EffectStage::kImuSensor);
+  if (chain.kinds.empty()) return;
+  const std::vector<const double*> parameters = chain.Parameters();
+  for (Eigen::Index i = 0; i < flight->specific_force.rows(); ++i) {
+    ImuSample<double> sample{flight->angular_velocity.row(i).transpose(),
+                             flight->angular_acceleration.row(i).transpose(),
+                             flight->specific_force.row(i).transpose()};
+    CorrectImu(chain.kinds, parameters, &sample);
+    flight->angular_velocity.row(i) = sample.angular_velocity.transpose();
+    flight->angular_acceleration.row(i) = sample.angular_acceleration.transpose();
+    flight->specific_force.row(i) = sample.specific_force.transpose();
+  }
 }
 
 }  // namespace
@@ -170,6 +188,7 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     out.angular_velocity = FiltFiltColumns(filter, gyro);
     out.angular_acceleration = FourthOrderCentralDifference(out.angular_velocity, dt);
     out.specific_force = FiltFiltColumns(filter, acc);
+    CorrectByKnownEffects(vehicle, &out);
     const Eigen::Vector3d gyro_noise = ColumnNoise(gyro), acc_noise = ColumnNoise(acc);
     out.noise.angular_velocity = gyro_noise * gain0;
     out.noise.angular_acceleration = gyro_noise * gain1;

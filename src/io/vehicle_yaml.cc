@@ -8,9 +8,40 @@
 
 #include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/io/atomic_file.h"
+#include "rotorid/model/effects.h"
 
 namespace rotorid {
+namespace {
+
+// The keys of effects a vehicle file may give known values of (imu_position: [x, y, z]), each a
+// list of the effect's values within its physical bounds.
+void ReadKnownEffects(const YAML::Node& root, const std::string& source, Vehicle* vehicle) {
+  for (EffectKind kind : AllEffects()) {
+    const std::string& key = kind->info().vehicle_key;
+    if (key.empty()) continue;
+    const YAML::Node node = root[key];
+    if (!node) continue;
+    const int size = kind->FixedDimension();
+    if (!node.IsSequence() || static_cast<int>(node.size()) != size)
+      internal::FailAt(source, node,
+                       key + " must be a list of " + std::to_string(size) + " values (" + kind->info().unit + ")");
+    Eigen::VectorXd value(size);
+    for (int k = 0; k < size; ++k) {
+      value[k] = internal::ReadYamlNumber(source, node[k], key);
+      if (!(value[k] >= kind->info().lower_bound && value[k] <= kind->info().upper_bound))
+        internal::FailAt(source, node[k],
+                         key + " values must lie in [" + ShortNumber(kind->info().lower_bound) + ", " +
+                             ShortNumber(kind->info().upper_bound) + "] " + kind->info().unit + " (" + kind->name() +
+                             "'s physical range)");
+    }
+    vehicle->known_effects[kind->name()] = value;
+  }
+}
+
+}  // namespace
+
 Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
   const YAML::Node root = internal::LoadYaml(text, source);
   if (!root.IsMap()) throw Error(source + ": a vehicle file must be a YAML mapping with name, mass and rotors");
@@ -67,6 +98,7 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
     if (!(*vehicle.rotor_radius_m > 0.0) || *vehicle.rotor_radius_m > 2.0)
       internal::FailAt(source, radius, "rotor_radius must be a propeller radius in m, in (0, 2]");
   }
+  ReadKnownEffects(root, source, &vehicle);
   if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error(source + ": " + problem);
   return vehicle;
 }
@@ -90,10 +122,17 @@ std::string VehicleToYaml(const Vehicle& vehicle) {
   if (vehicle.command_to_speed) {
     const Eigen::Vector3d& c = vehicle.command_to_speed->coefficients;
     out << "command_to_speed: [" << c[0] << ", " << c[1] << ", " << c[2] << "]  # Omega = c0 + c1 u + c2 u^2 (rad/s)\n";
-  if (vehicle.command_to_speed_voltage_v)
-    out << "command_to_speed_voltage: " << *vehicle.command_to_speed_voltage_v << "  # V, the map's battery voltage\n";
+    if (vehicle.command_to_speed_voltage_v)
+      out << "command_to_speed_voltage: " << *vehicle.command_to_speed_voltage_v
+          << "  # V, the map's battery voltage\n";
   }
   if (vehicle.rotor_radius_m) out << "rotor_radius: " << *vehicle.rotor_radius_m << "  # m\n";
+  for (const auto& [name, value] : vehicle.known_effects) {
+    const EffectKind kind = ParseEffectKind(name);
+    out << kind->info().vehicle_key << ": [";
+    for (Eigen::Index k = 0; k < value.size(); ++k) out << (k ? ", " : "") << value[k];
+    out << "]  # " << kind->info().unit << ", a known " << name << "\n";
+  }
   return out.str();
 }
 

@@ -51,6 +51,9 @@ const EffectDescriptor& ImuLeverArmEffect() {
     // r_z is ms_z / m in the force rows and ms_z is nearly absent from the moment rows (the specific
     // force is along z): refined and screened only when named (--effects ...,imu_lever_arm).
     i.default_candidate = false;
+    // A lever arm measured on the vehicle (vehicle file `imu_position: [x, y, z]`) is corrected in
+    // processing; the effect then estimates what is left of it.
+    i.vehicle_key = "imu_position";
     return i;
   }());
   return effect;

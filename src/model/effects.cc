@@ -174,6 +174,12 @@ EffectChain ActingEffects(const Effects& effects, EffectStage stage, const std::
   return chain;
 }
 
+Effects KnownEffects(const Vehicle& vehicle) {
+  Effects known;
+  for (const auto& [name, value] : vehicle.known_effects) known.Set(ParseEffectKind(name), value);
+  return known;
+}
+
 int EffectDimension(EffectKind kind) {
   const int dimension = kind->FixedDimension();
   if (dimension < 0) throw Error(std::string("effect '") + kind->name() + "' has one value per rotor");

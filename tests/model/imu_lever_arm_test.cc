@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rotorid/core/error.h"
+#include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/effects.h"
 #include "rotorid/refine/refine.h"
 #include "support/test_support.h"
@@ -64,12 +66,63 @@ TEST(ImuLeverArmTest, RefinementRecoversASimulatedLeverArm) {
   const auto named = NamedParameters(linear.system, refined.refined.chi);
   for (int a = 0; a < 2; ++a) {
     const std::string name = std::string("B.ms_") + "xy"[a];
-    EXPECT_NEAR(named.at(name), sim.truth.body.first_moment[a], 0.02 * std::abs(sim.truth.body.first_moment[a])) << name;
+    EXPECT_NEAR(named.at(name), sim.truth.body.first_moment[a], 0.02 * std::abs(sim.truth.body.first_moment[a]))
+        << name;
   }
-  EXPECT_NE(std::find(refined.resting_on_discarded.begin(), refined.resting_on_discarded.end(),
-                      "imu_position_m_z ~ B.ms_z"),
-            refined.resting_on_discarded.end())
+  EXPECT_NE(
+      std::find(refined.resting_on_discarded.begin(), refined.resting_on_discarded.end(), "imu_position_m_z ~ B.ms_z"),
+      refined.resting_on_discarded.end())
       << "r_z is a guess resting on ms_z = 0 and must be said to be";
+}
+
+// A lever arm known from the vehicle (`imu_position` in the vehicle file) is corrected in
+// processing: the refinement then finds nothing left of it (and the arm itself when it is not
+// given), and the first moments stay at the truth.
+TEST(ImuLeverArmTest, KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing) {
+  const Eigen::Vector3d truth(0.020, -0.015, 0.010);
+  Effects effects;
+  effects.Set("imu_position_m", truth);
+  const SimulationResult sim = testing::SimulatePreset("B", 60.0, 3, effects);
+  SimulationResult known = sim;
+  known.vehicle.known_effects["imu_lever_arm"] = truth;
+  const IdentificationResult ignored = testing::IdentifySimulated(sim);
+  const IdentificationResult corrected = testing::IdentifySimulated(known);
+  RefineOptions options;
+  options.effects = {&LeverArm()};
+  const Eigen::VectorXd left_when_ignored = Refine(ignored, options).effects.Get(&LeverArm());
+  const Eigen::VectorXd left_when_known = Refine(corrected, options).effects.Get(&LeverArm());
+  for (int a = 0; a < 2; ++a) {
+    EXPECT_NEAR(left_when_ignored[a], truth[a], 0.002) << "axis " << a;
+    EXPECT_NEAR(left_when_known[a], 0.0, 0.002) << "axis " << a;
+  }
+  const std::map<std::string, double> values = NamedParameters(corrected.system, corrected.solution.chi);
+  for (int a = 0; a < 2; ++a) {
+    const std::string name = std::string("B.ms_") + "xy"[a];
+    const auto column =
+        std::find(corrected.system.parameter_names.begin(), corrected.system.parameter_names.end(), name) -
+        corrected.system.parameter_names.begin();
+    EXPECT_NEAR(values.at(name), sim.truth.body.first_moment[a], 3 * corrected.solution.std[column]) << name;
+  }
+}
+
+TEST(ImuLeverArmTest, VehicleFileGivesAKnownLeverArmAndRefusesOneInMillimetres) {
+  const std::string rotors =
+      "name: B\nmass: 1.3\nrotors:\n  - {position: [0.2, 0, 0], spin: 1}\n"
+      "  - {position: [-0.2, 0, 0], spin: 1}\n  - {position: [0, 0.2, 0], spin: -1}\n"
+      "  - {position: [0, -0.2, 0], spin: -1}\n";
+  const Vehicle vehicle = ParseVehicleYaml(rotors + "imu_position: [0.02, -0.015, 0.01]\n", "B.yaml");
+  ASSERT_EQ(vehicle.known_effects.count("imu_lever_arm"), 1u);
+  EXPECT_LT((vehicle.known_effects.at("imu_lever_arm") - Eigen::Vector3d(0.02, -0.015, 0.01)).norm(), 1e-15);
+  // Written back as it was read.
+  EXPECT_EQ(ParseVehicleYaml(VehicleToYaml(vehicle), "again.yaml").known_effects, vehicle.known_effects);
+  try {
+    ParseVehicleYaml(rotors + "imu_position: [20, -15, 10]\n", "B.yaml");
+    ADD_FAILURE() << "a lever arm in mm was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("B.yaml:8:16"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("imu_position values must lie in [-0.3, 0.3] m"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

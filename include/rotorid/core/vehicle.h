@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +38,9 @@ struct Vehicle {
   std::optional<double> rotor_radius_m = std::nullopt;
   // The battery voltage command_to_speed was measured at (V), for the battery effect.
   std::optional<double> command_to_speed_voltage_v = std::nullopt;
+  // Known values of effects, by effect name, from the vehicle file keys their descriptors name
+  // (imu_position: a known IMU lever arm). Processing corrects the IMU data by them.
+  std::map<std::string, Eigen::VectorXd> known_effects = {};
   // The file it was read from (empty when built in code), for messages. Last, so that aggregate
   // initialisations {name, mass, rotors, map} stay valid.
   std::string source = "";

@@ -168,6 +168,9 @@ class EffectDescriptor {
     // for an effect that a parameter of the linear model mimics so closely that, on ordinary
     // flights, it runs to its bound or takes that parameter's value (used when named).
     bool default_candidate = true;
+    // The vehicle file key that gives a known value of an IMU-sensor effect ("imu_position"), or
+    // empty: processing corrects the IMU data by it, and the effect then estimates what is left.
+    std::string vehicle_key;
   };
 
   explicit EffectDescriptor(Info info) : info_(std::move(info)) {}
@@ -305,6 +308,16 @@ struct EffectChain {
 // The effects of `stage` that are non-zero in `effects` or listed in `also` (free ones, whose
 // derivative is wanted even at zero).
 EffectChain ActingEffects(const Effects& effects, EffectStage stage, const std::vector<EffectKind>& also = {});
+
+// Corrects an IMU sample from the log to the body at O_b: parameters[j] are those of chain[j]
+// (IMU effects in increasing chain order; the corrections run backwards).
+template <typename T>
+void CorrectImu(const std::vector<EffectKind>& chain, const std::vector<const T*>& parameters, ImuSample<T>* s) {
+  for (size_t j = chain.size(); j-- > 0;) chain[j]->CorrectImu(parameters[j], s);
+}
+
+// The effects a vehicle file gives known values of (EffectDescriptor::Info::vehicle_key).
+Effects KnownEffects(const Vehicle& vehicle);
 
 // The rotor-wrench effects' terms at one sample: parameters[j] are those of chain[j].
 template <typename T>

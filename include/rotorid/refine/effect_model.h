@@ -63,13 +63,6 @@ RotorSample<T> FlightRotorSample(const ProcessedFlight& flight, int i, const Eig
   return sample;
 }
 
-// Corrects an IMU sample from the log to the body at O_b: parameters[j] are those of chain[j]
-// (IMU effects in increasing chain order; the corrections run backwards).
-template <typename T>
-void CorrectImu(const std::vector<EffectKind>& chain, const std::vector<const T*>& parameters, ImuSample<T>* s) {
-  for (size_t j = chain.size(); j-- > 0;) chain[j]->CorrectImu(parameters[j], s);
-}
-
 // The IDIM rows of a flight (as BuildIdimMatrix) with the effects applied.
 Eigen::MatrixXd BuildIdimMatrixWithEffects(const ProcessedFlight& flight, const Effects& effects);
 
