@@ -178,15 +178,6 @@ std::vector<EffectKind> CandidatesWorthRefining(const std::vector<EffectKind>& r
 
 namespace {
 
-// The grid-searched effect's best value of the TLS criterion on the diagnosis' delay range.
-double CoarseDelay(const IdentificationResult& full, const DiagnosisOptions& options) {
-  const EffectKind searched =
-      *std::find_if(AllEffects().begin(), AllEffects().end(), [](EffectKind k) { return k->info().grid_searched; });
-  const std::vector<double> grid = options.delay_search.Grid();
-  const std::vector<double> criterion = CriterionOverGrid(full, Effects{}, searched, grid, options.num_threads);
-  return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
-}
-
 // Per fold, the start of `kind` refined on top of `selected` (fitted as `base`): the fold's base fit
 // plus the linearised step of the joint model, which also moves the effects already selected
 // (adding a lag on top of a delay shortens the delay). The rotor-signal effects are nonlinear far
@@ -259,7 +250,12 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
     for (EffectKind kind : to_fit) {
       if (kind->stage() == EffectStage::kRotorSignal && !delay_searched) {
         delay_searched = true;
-        forward.initial_delay_s = CoarseDelay(all_data.linear, options);
+        RefineOptions search;  // the linear model, no effects, over the diagnosis' delay range
+        search.delay_search = options.delay_search;
+        search.num_threads = options.num_threads;
+        const EffectKind searched = *std::find_if(AllEffects().begin(), AllEffects().end(),
+                                                  [](EffectKind k) { return k->info().grid_searched; });
+        forward.initial_delay_s = CoarseDelaySearch(all_data.linear, search, searched);
         timer->Mark("coarse delay search");
       }
       masks.push_back(selected | Bit(kind));

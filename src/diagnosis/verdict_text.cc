@@ -75,8 +75,10 @@ std::string OnBoundStatement(EffectKind kind, const Eigen::VectorXd& value) {
 void AddBoundNotes(const std::vector<EffectKind>& on_bound, std::vector<EffectVerdict>* verdicts) {
   for (EffectVerdict& v : *verdicts)
     if (v.selected && std::find(on_bound.begin(), on_bound.end(), v.kind) != on_bound.end())
-      if (const std::string statement = OnBoundStatement(v.kind, v.value); !statement.empty())
+      if (const std::string statement = OnBoundStatement(v.kind, v.value); !statement.empty()) {
+        v.bound_note = statement;
         v.note += "; " + statement;
+      }
 }
 
 namespace {
@@ -157,9 +159,7 @@ std::string WhichText(const Diagnosis& d) {
           << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
           << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
           << "; held-out gap shrinks " << std::setprecision(1) << v.test.shrink_pct << " %)\n";
-      // What the final fit says beyond the shrink (VerdictNote): a bound it ended on.
-      if (const size_t more = v.note.find("; "); more != std::string::npos)
-        out << "       " << v.note.substr(more + 2) << "\n";
+      if (!v.bound_note.empty()) out << "       " << v.bound_note << "\n";
     }
   }
   for (const ConfoundedEffects& c : d.confounded) {

@@ -457,19 +457,13 @@ IdentificationResult IdentifyWithChecks(const std::vector<FlightData>& flights, 
                                         std::vector<Check>* checks, const StepProgress& progress) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   const int total_steps = IdentifySteps(flights);
-  std::vector<ProcessedFlight> processed;
-  processed.reserve(flights.size());
-  for (const FlightData& f : flights) {
-    processed.push_back(ProcessFlight(f.log, f.vehicle, f.weight, options.observation));
-    if (progress) progress(static_cast<int>(processed.size()), total_steps);
-  }
+  std::vector<ProcessedFlight> processed =
+      ProcessFlights(flights, options.observation, OffsetProgress(progress, 0, total_steps));
   *checks = CheckFlights(flights, processed);
   IdentificationResult result;
-  const int processed_steps = static_cast<int>(flights.size());
   try {
-    result = IdentifyProcessed(std::move(processed), options, [&](int done, int) {
-      if (progress) progress(processed_steps + done, total_steps);
-    });
+    result = IdentifyProcessed(std::move(processed), options,
+                               OffsetProgress(progress, static_cast<int>(flights.size()), total_steps));
   } catch (const Error& e) {
     if (!AnyCheckFailed(*checks)) throw;
     throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(*checks));

@@ -21,10 +21,14 @@ Eigen::VectorXd IdentificationResult::ChiT() const {
   return chi_t;
 }
 
-std::vector<ProcessedFlight> ProcessFlights(const std::vector<FlightData>& flights, const ObservationOptions& options) {
+std::vector<ProcessedFlight> ProcessFlights(const std::vector<FlightData>& flights, const ObservationOptions& options,
+                                            const StepProgress& progress) {
   std::vector<ProcessedFlight> out;
   out.reserve(flights.size());
-  for (const FlightData& f : flights) out.push_back(ProcessFlight(f.log, f.vehicle, f.weight, options));
+  for (const FlightData& f : flights) {
+    out.push_back(ProcessFlight(f.log, f.vehicle, f.weight, options));
+    if (progress) progress(static_cast<int>(out.size()), static_cast<int>(flights.size()));
+  }
   return out;
 }
 

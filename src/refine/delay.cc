@@ -58,9 +58,7 @@ DelayEstimate EstimateDelay(const IdentificationResult& linear, const DelayOptio
   const EffectKind lag = ParseEffectKind("motor_lag");
   const int total_steps = DelaySteps(options);
   if (progress) progress(1, total_steps);
-  out.refined = Refine(linear, refine, [&](int done, int) {
-    if (progress) progress(1 + done, total_steps);
-  });
+  out.refined = Refine(linear, refine, OffsetProgress(progress, 1, total_steps));
   out.delay_s = out.refined.effects.Scalar(DelayEffect());
   out.delay_std_s = out.refined.effects_std.Scalar(DelayEffect());
   out.motor_tau_s = out.refined.effects.Scalar(lag);

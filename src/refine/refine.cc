@@ -7,13 +7,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <mutex>
 
 #include "refine/grid_search.h"
 #include "refine/idim_residual.h"
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/refine/effect_model.h"
 #include "rotorid/signal/autocorrelation.h"
@@ -388,10 +388,9 @@ void NoteEffectsRestingOnDiscarded(EffectProblem* ep, const IdimSystem& system,
   for (const RestingOnDiscarded& r : EffectsRestingOnDiscarded(
            ep->problem.get(), ep->scaled_chi.data(), effect_block_pointers, system, ep->fixed, effect_labels)) {
     result->resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
-    char share[32];
-    std::snprintf(share, sizeof share, "%.1f %%", 100.0 * r.explained);
     result->warnings.push_back(r.coordinate + " is confounded with " + r.parameter +
-                               ", which the essential selection holds at 0 (it explains " + share +
+                               ", which the essential selection holds at 0 (it explains " +
+                               FormatValue("%.1f %%", 100.0 * r.explained) +
                                " of its effect on the rows): its value assumes " + r.parameter + " = 0");
   }
 }

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "diagnosis/candidate_kinds.h"
 #include "diagnosis/confounding.h"
 #include "diagnosis/selection.h"
 #include "diagnosis/verdicts.h"
@@ -17,11 +18,11 @@
 namespace rotorid::internal {
 namespace {
 
-const EffectKind kDelay = ParseEffectKind("delay");
-const EffectKind kMotorLag = ParseEffectKind("motor_lag");
-const EffectKind kAccBias = ParseEffectKind("acc_bias");
-const EffectKind kGyroBias = ParseEffectKind("gyro_bias");
-const EffectKind kMisalignment = ParseEffectKind("misalignment");
+using rotorid::testing::kAccBias;
+using rotorid::testing::kDelay;
+using rotorid::testing::kGyroBias;
+using rotorid::testing::kMisalignment;
+using rotorid::testing::kMotorLag;
 
 constexpr int kEntries = 6000;  // held-out residual entries of every hand-made gap
 

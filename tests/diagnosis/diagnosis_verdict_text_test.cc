@@ -6,16 +6,17 @@
 #include <string>
 #include <vector>
 
+#include "diagnosis/candidate_kinds.h"
 #include "diagnosis/verdict_text.h"
 #include "rotorid/diagnosis/diagnosis.h"
 
 namespace rotorid::internal {
 namespace {
 
-const EffectKind kDelay = ParseEffectKind("delay");
-const EffectKind kMotorLag = ParseEffectKind("motor_lag");
-const EffectKind kAccBias = ParseEffectKind("acc_bias");
-const EffectKind kGyroBias = ParseEffectKind("gyro_bias");
+using rotorid::testing::kAccBias;
+using rotorid::testing::kDelay;
+using rotorid::testing::kGyroBias;
+using rotorid::testing::kMotorLag;
 
 Eigen::VectorXd Scalar(double value) { return Eigen::VectorXd::Constant(1, value); }
 
@@ -74,6 +75,8 @@ TEST(AddBoundNotesTest, OnlyKeptEffectsOnABoundGetTheStatement) {
             "held-out gap shrinks 58.9 %; motor_lag = 300 ms is on its upper bound (300 ms): the data push it "
             "further; treat it as absorbing something else");
   EXPECT_EQ(verdicts[1].note, "held-out gap shrinks 0.2 %");
+  EXPECT_EQ(verdicts[0].bound_note, verdicts[0].note.substr(verdicts[0].note.find("; ") + 2));
+  EXPECT_EQ(verdicts[1].bound_note, "");
   EXPECT_EQ(verdicts[2].note, "not significant");
 }
 
@@ -81,12 +84,11 @@ TEST(WhichTextTest, KeptEffectOnABoundHasItsOwnLine) {
   Diagnosis d;
   d.selected = {kMotorLag, kDelay};
   d.ranking = {
-      Verdict(kMotorLag, true, Scalar(0.3),
-              "held-out gap shrinks 58.9 %; motor_lag = 300 ms is on its upper bound (300 ms): the data push it "
-              "further; treat it as absorbing something else"),
+      Verdict(kMotorLag, true, Scalar(0.3), "held-out gap shrinks 58.9 %"),
       Verdict(kDelay, true, Scalar(0.008), "held-out gap shrinks 0.2 %"),
       Verdict(kGyroBias, false, Eigen::Vector3d::Zero(), "not refined"),
   };
+  AddBoundNotes({kMotorLag}, &d.ranking);
   d.ranking[0].std = Scalar(1e-4);
   d.ranking[0].test.f_statistic = 52.04;
   d.ranking[0].test.p_value = 1e-5;

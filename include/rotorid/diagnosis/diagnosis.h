@@ -131,6 +131,8 @@ struct EffectVerdict {
   // the effects selected after it (`test` is that test).
   bool dropped_as_redundant = false;
   std::string note;  // one line for people
+  // A selected effect whose final fit ended on a bound: which value, which bound (also in `note`).
+  std::string bound_note;
 };
 
 struct ConfoundedEffects {

@@ -64,7 +64,9 @@ struct IdentificationResult {
   Eigen::VectorXd ChiT() const;
 };
 
-std::vector<ProcessedFlight> ProcessFlights(const std::vector<FlightData>& flights, const ObservationOptions& options);
+// Progress steps: one per flight processed.
+std::vector<ProcessedFlight> ProcessFlights(const std::vector<FlightData>& flights, const ObservationOptions& options,
+                                            const StepProgress& progress = {});
 Excitation MeasureExcitation(const ProcessedFlight& flight);
 
 // Throws rotorid::Error when the result is not usable (scale lost, kt not identifiable, or a
