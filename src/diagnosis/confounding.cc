@@ -40,7 +40,7 @@ std::string AloneValues(EffectKind a, const ModelRecord& with_a, EffectKind b, c
 }  // namespace
 
 ConfoundedEffects CompareRival(const Rival& rival, const ModelRecord& with_selected, const ModelRecord& with_other,
-                               const Eigen::MatrixXd& scales, double alpha) {
+                               const HeldOutScales& scales, double alpha) {
   ConfoundedEffects c;
   c.selected = rival.selected;
   c.other = rival.other;
@@ -88,7 +88,7 @@ void SetLargestCorrelation(const EffectSubsetFit& joint_fit, ConfoundedEffects* 
 }
 
 std::vector<ConfoundedEffects> AnalyzeConfounding(const std::vector<Rival>& rivals, const SelectionContext& context,
-                                                  const Eigen::MatrixXd& scales,
+                                                  const HeldOutScales& scales,
                                                   const EffectLinearization& final_linearization,
                                                   const std::vector<EffectKind>& kept_kinds) {
   std::vector<ConfoundedEffects> confounded;

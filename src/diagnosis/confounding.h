@@ -35,7 +35,7 @@ std::vector<Rival> FindRivals(const std::vector<ForwardStep>& steps, EffectMask 
 // distinguishable when significant at `alpha` and the shrinks are not practically equal; the note
 // says which, and for two scalar effects what each fits alone.
 ConfoundedEffects CompareRival(const Rival& rival, const ModelRecord& with_selected, const ModelRecord& with_other,
-                               const Eigen::MatrixXd& scales, double alpha);
+                               const HeldOutScales& scales, double alpha);
 
 // The largest |correlation| between a parameter of c->selected and one of c->other in `joint_fit`
 // (a fit with both in the model), and its labels.
@@ -45,7 +45,7 @@ void SetLargestCorrelation(const EffectSubsetFit& joint_fit, ConfoundedEffects* 
 // model with the kept effects (`kept_kinds`) and the rival in it (the refinement's Ceres covariance
 // drops weak directions, see linearization.h).
 std::vector<ConfoundedEffects> AnalyzeConfounding(const std::vector<Rival>& rivals, const SelectionContext& context,
-                                                  const Eigen::MatrixXd& scales,
+                                                  const HeldOutScales& scales,
                                                   const EffectLinearization& final_linearization,
                                                   const std::vector<EffectKind>& kept_kinds);
 

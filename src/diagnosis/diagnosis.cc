@@ -61,7 +61,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
 
   int num_folds() const { return static_cast<int>(folds_.size()); }
   int refinements() const { return refinements_; }
-  const Eigen::MatrixXd& scales() const { return scales_; }
+  const internal::HeldOutScales& scales() const { return scales_; }
 
   ModelRecord Baseline() {
     ModelRecord record;
@@ -78,7 +78,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
       scored_.push_back(scored);
     }
     record.held_out.scored = scored_;
-    scales_ = internal::HeldOutScales(record.held_out, num_evaluation_flights_);
+    scales_ = internal::BaselineScales(record.held_out, num_evaluation_flights_);
     // The noise floor barely depends on the fitted parameters: the baseline's serves every model.
     noise_sq_.setZero();
     for (int k = 0; k < num_folds(); ++k)
@@ -166,7 +166,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
   std::vector<IdentificationResult> fold_linear_;
   int num_evaluation_flights_ = 0;
   const DiagnosisProgress& progress_;
-  Eigen::MatrixXd scales_;
+  internal::HeldOutScales scales_;
   ComponentVector noise_sq_ = ComponentVector::Zero();
   std::vector<std::array<bool, kNumWrenchComponents>> scored_;
   std::mutex mutex_;

@@ -56,23 +56,47 @@ int HeldOutResidual::row_samples() const {
   return rows;
 }
 
-Eigen::MatrixXd HeldOutScales(const HeldOutResidual& baseline, int num_flights) {
-  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(num_flights, kComponents);
+namespace {
+
+// Per evaluation flight and component: the RMS of the scored residual and of the rotor wrench.
+void ResidualAndWrenchRms(const HeldOutResidual& model, int num_flights, Eigen::MatrixXd* residual_rms,
+                          Eigen::MatrixXd* wrench_rms) {
+  Eigen::MatrixXd residual_sq = Eigen::MatrixXd::Zero(num_flights, kComponents);
+  Eigen::MatrixXd wrench_sq = Eigen::MatrixXd::Zero(num_flights, kComponents);
   Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(num_flights, kComponents);
-  for (size_t s = 0; s < baseline.segments.size(); ++s) {
-    const int f = baseline.flight[s];
-    const Eigen::MatrixXd& r = baseline.segments[s].residual;
+  for (size_t s = 0; s < model.segments.size(); ++s) {
+    const int f = model.flight[s];
     for (int j = 0; j < kComponents; ++j) {
-      if (!baseline.scored[s][j]) continue;
-      sum(f, j) += r.col(j).squaredNorm();
-      rows(f, j) += static_cast<double>(r.rows());
+      if (!model.scored[s][j]) continue;
+      residual_sq(f, j) += model.segments[s].residual.col(j).squaredNorm();
+      wrench_sq(f, j) += model.segments[s].rotor_wrench.col(j).squaredNorm();
+      rows(f, j) += static_cast<double>(model.segments[s].residual.rows());
     }
   }
-  Eigen::MatrixXd scales = Eigen::MatrixXd::Ones(num_flights, kComponents);
-  for (int f = 0; f < num_flights; ++f)
-    for (int j = 0; j < kComponents; ++j)
-      if (rows(f, j) > 0.0 && sum(f, j) > 0.0) scales(f, j) = std::sqrt(sum(f, j) / rows(f, j));
+  const Eigen::MatrixXd per_row = rows.cwiseMax(1.0).cwiseInverse();
+  *residual_rms = residual_sq.cwiseProduct(per_row).cwiseSqrt();
+  *wrench_rms = wrench_sq.cwiseProduct(per_row).cwiseSqrt();
+}
+
+}  // namespace
+
+HeldOutScales BaselineScales(const HeldOutResidual& baseline, int num_flights) {
+  HeldOutScales scales;
+  ResidualAndWrenchRms(baseline, num_flights, &scales.residual_rms, &scales.wrench_rms);
+  scales.residual_rms = (scales.residual_rms.array() > 0.0).select(scales.residual_rms, 1.0);
   return scales;
+}
+
+Eigen::MatrixXd ResidualWeights(const HeldOutResidual& model, const HeldOutScales& scales) {
+  const Eigen::Index num_flights = scales.residual_rms.rows();
+  Eigen::MatrixXd residual_rms, wrench_rms;
+  ResidualAndWrenchRms(model, static_cast<int>(num_flights), &residual_rms, &wrench_rms);
+  Eigen::MatrixXd weights = scales.residual_rms.cwiseInverse();
+  for (Eigen::Index f = 0; f < num_flights; ++f)
+    for (int j = 0; j < kComponents; ++j)
+      if (scales.wrench_rms(f, j) > 0.0 && wrench_rms(f, j) > 0.0)
+        weights(f, j) *= scales.wrench_rms(f, j) / wrench_rms(f, j);
+  return weights;
 }
 
 std::vector<std::optional<double>> RelativeErrorFromSums(const ComponentVector& residual_sq,
@@ -99,8 +123,9 @@ ComponentVector NoiseResidualSquares(const ProcessedFlight& flight, const std::m
   return out;
 }
 
-HeldOutGap ScoreHeldOut(const HeldOutResidual& residual, const Eigen::MatrixXd& scales, const ComponentVector& noise_sq) {
+HeldOutGap ScoreHeldOut(const HeldOutResidual& residual, const HeldOutScales& scales, const ComponentVector& noise_sq) {
   HeldOutGap gap;
+  const Eigen::MatrixXd weights = ResidualWeights(residual, scales);
   ComponentVector residual_sq = ComponentVector::Zero(), wrench_sq = ComponentVector::Zero();
   std::vector<std::vector<Eigen::VectorXd>> scaled(kComponents);
   int rows = 0;
@@ -112,7 +137,7 @@ HeldOutGap ScoreHeldOut(const HeldOutResidual& residual, const Eigen::MatrixXd& 
       residual_sq[j] += segment.residual.col(j).squaredNorm();
       wrench_sq[j] += segment.rotor_wrench.col(j).squaredNorm();
       if (!residual.scored[s][j]) continue;
-      Eigen::VectorXd series = segment.residual.col(j) / scales(f, j);
+      Eigen::VectorXd series = segment.residual.col(j) * weights(f, j);
       gap.whitened_ssr += series.squaredNorm();
       gap.entries += static_cast<int>(series.size());
       scaled[j].push_back(std::move(series));
@@ -152,8 +177,9 @@ EffectTest TestAddedEffects(const HeldOutGap& without, const HeldOutGap& with, i
   return test;
 }
 
-PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const Eigen::MatrixXd& scales) {
+PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const HeldOutScales& scales) {
   if (a.segments.size() != b.segments.size()) throw Error("held-out comparison of different row sets");
+  const Eigen::MatrixXd weights_a = ResidualWeights(a, scales), weights_b = ResidualWeights(b, scales);
   std::vector<Eigen::VectorXd> differences;
   double sum = 0.0;
   Eigen::Index n = 0;
@@ -161,12 +187,12 @@ PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual&
     const Eigen::MatrixXd& ra = a.segments[s].residual;
     const Eigen::MatrixXd& rb = b.segments[s].residual;
     if (ra.rows() != rb.rows()) throw Error("held-out comparison of different row sets");
-    Eigen::RowVectorXd inverse_scale = scales.row(a.flight[s]).cwiseInverse();
+    Eigen::RowVectorXd weight_a = weights_a.row(a.flight[s]), weight_b = weights_b.row(a.flight[s]);
     for (int j = 0; j < kComponents; ++j)
-      if (!a.scored[s][j]) inverse_scale[j] = 0.0;
+      if (!a.scored[s][j]) weight_a[j] = weight_b[j] = 0.0;
     Eigen::VectorXd d(ra.rows());
     for (Eigen::Index r = 0; r < ra.rows(); ++r)
-      d[r] = rb.row(r).cwiseProduct(inverse_scale).squaredNorm() - ra.row(r).cwiseProduct(inverse_scale).squaredNorm();
+      d[r] = rb.row(r).cwiseProduct(weight_b).squaredNorm() - ra.row(r).cwiseProduct(weight_a).squaredNorm();
     sum += d.sum();
     n += d.size();
     differences.push_back(std::move(d));

@@ -42,17 +42,29 @@ struct HeldOutResidual {
   int row_samples() const;
 };
 
-// Per evaluation flight (row) and component (column): the RMS of `baseline` there (1 where it is
-// 0). Residuals of every model are divided by these, so that the baseline's mean square is 1 in
-// every flight and component and the components weigh the same.
-Eigen::MatrixXd HeldOutScales(const HeldOutResidual& baseline, int num_flights);
+// Per evaluation flight (row) and component (column), from the baseline: the RMS of its residual
+// (1 where it is 0), so that the baseline's mean square is 1 in every flight and component and the
+// components weigh the same; and the RMS of its rotor-model wrench (0 where it has none).
+struct HeldOutScales {
+  Eigen::MatrixXd residual_rms;
+  Eigen::MatrixXd wrench_rms;
+};
+HeldOutScales BaselineScales(const HeldOutResidual& baseline, int num_flights);
+
+// The factor each entry of `model`'s residual is multiplied by, per evaluation flight and
+// component: 1 / the baseline's residual RMS, times the baseline's rotor-wrench RMS over this
+// model's where both have one. The second factor makes the score blind to a row group's free
+// scale: in the yaw row kd and I_zz can shrink together (a delay the model lacks makes the linear
+// fit do so), and a model's residual shrinks with them whether it is right or not; measured
+// against its own rotor wrench, as Table III measures it, it cannot.
+Eigen::MatrixXd ResidualWeights(const HeldOutResidual& model, const HeldOutScales& scales);
 
 // Expected sum of squared residuals per component that the white sensor noise of the signals
 // causes in these rows (IdimNoiseCovariance with the fitted chi_t).
 ComponentVector NoiseResidualSquares(const ProcessedFlight& flight, const std::map<std::string, double>& parameters);
 
 // `noise_sq`: NoiseResidualSquares summed over the held-out rows (for the noise floor).
-HeldOutGap ScoreHeldOut(const HeldOutResidual& residual, const Eigen::MatrixXd& scales, const ComponentVector& noise_sq);
+HeldOutGap ScoreHeldOut(const HeldOutResidual& residual, const HeldOutScales& scales, const ComponentVector& noise_sq);
 
 // F-test of a nested model with `added_parameters` more effect parameters:
 //   F = ((SSR_without - SSR_with) / q) / (a SSR_with / (N - q)),  F(q, N/a - q) under "no effect",
@@ -62,14 +74,14 @@ EffectTest TestAddedEffects(const HeldOutGap& without, const HeldOutGap& with, i
                             double min_shrink_pct);
 
 // Non-nested comparison of two models on the same held-out rows: d = sum_j (e_b^2 - e_a^2) per row
-// sample (scaled residuals), t = mean(d) / sqrt(long-run variance / n) with a Bartlett (Newey-West)
+// sample (residuals weighted by ResidualWeights), t = mean(d) / sqrt(long-run variance / n) with a Bartlett (Newey-West)
 // long-run variance; p = P(N(0,1) > t). t > 0 when `a` fits better.
 struct PairedComparison {
   double mean_difference = 0.0;
   double t_statistic = 0.0;
   double p_value = 1.0;
 };
-PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const Eigen::MatrixXd& scales);
+PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const HeldOutScales& scales);
 
 // The in-sample score test of the screening: a first-order fit of the effect removes this
 // fraction of the (scaled) residual; F = f / (1 - f) (N - q) / (q a) with N rows and a the

@@ -395,6 +395,28 @@ void NoteEffectsRestingOnDiscarded(EffectProblem* ep, const IdimSystem& system,
   }
 }
 
+// Two scalar effects of one unit that trade against each other (correlation below -0.9, e.g. a
+// delay and a motor lag: their phase lags add) are fixed by the data only in their sum: "; what the
+// data fix is delay_s + motor_tau_s = 62.9 +- 3.1 ms". Empty for other pairs.
+std::string WhatATradingPairFixes(const RefineResult& result, int a, int b) {
+  const double correlation = result.effect_correlation(a, b);
+  const auto scalar_effect = [&](const std::string& label) -> EffectKind {
+    for (EffectKind kind : result.enabled)
+      if (kind->parameter_name() == label && kind->FixedDimension() == 1) return kind;
+    return nullptr;
+  };
+  const EffectKind first = scalar_effect(result.effect_labels[a]);
+  const EffectKind second = scalar_effect(result.effect_labels[b]);
+  if (!first || !second || !(correlation < -0.9) || first->info().unit != second->info().unit) return "";
+  const double std_a = result.effects_std.Scalar(first), std_b = result.effects_std.Scalar(second);
+  const double sum = result.effects.Scalar(first) + result.effects.Scalar(second);
+  const double sum_std = std::sqrt(std::max(0.0, std_a * std_a + std_b * std_b + 2.0 * correlation * std_a * std_b));
+  const double scale = first->info().display_scale;
+  const std::string& unit = first->info().display_unit.empty() ? first->info().unit : first->info().display_unit;
+  return "; what the data fix is " + first->parameter_name() + " + " + second->parameter_name() + " = " +
+         FormatValue("%.3g", scale * sum) + " +- " + FormatValue("%.2g", scale * sum_std) + " " + unit;
+}
+
 // The covariance of chi and the effects at the solution, scaled by the observed residual variance
 // (`cost` over the degrees of freedom) and the autocorrelation factor; where the Jacobian is rank
 // deficient, the confounded coordinates instead.
@@ -599,13 +621,13 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   result.refined_criterion = EffectCriterion(linear, result.effects);
   result.relative_error_pct =
       RelativeErrorWithEffects(linear.flights, NamedParameters(linear.system, result.refined.chi), result.effects);
-  // Confounded effects: say how much.
+  // Confounded effects: say how much, and what the data fix instead.
   for (int a = 0; a < result.effect_correlation.rows(); ++a)
     for (int b = a + 1; b < result.effect_correlation.cols(); ++b)
       if (std::abs(result.effect_correlation(a, b)) > 0.9)
         result.warnings.push_back(result.effect_labels[a] + " and " + result.effect_labels[b] +
                                   " are strongly correlated (" + std::to_string(result.effect_correlation(a, b)) +
-                                  "): these flights separate them poorly");
+                                  "): these flights separate them poorly" + WhatATradingPairFixes(result, a, b));
   return result;
 }
 

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "diagnosis/held_out.h"
 #include "diagnosis/linearization.h"
 #include "diagnosis/statistics.h"
 #include "rotorid/ident/identify.h"
@@ -69,4 +70,42 @@ TEST(EffectLinearizationTest, FirstOrderStepRecoversAnAccBias) {
 }
 
 }  // namespace
+// A model whose yaw row shrinks as a whole (kd and I_zz scaled down together, as a linear fit does
+// when a delay spoils the yaw equation) has a smaller held-out Mz residual without fitting any
+// better: the score measures each residual against the model's own rotor wrench and gives it the
+// baseline's score, while a model that truly halves the Mz residual scores better.
+TEST(HeldOutScoreTest, ShrinkingARowGroupsScaleDoesNotPay) {
+  Eigen::MatrixXd residual(400, 6), wrench(400, 6);
+  for (int r = 0; r < 400; ++r)
+    for (int j = 0; j < 6; ++j) {
+      residual(r, j) = std::sin(0.37 * r + j) * (1.0 + 0.1 * j);
+      wrench(r, j) = j < 2 ? 0.0 : 5.0 * std::cos(0.11 * r + 2 * j);
+    }
+  const auto held_out = [](const Eigen::MatrixXd& e, const Eigen::MatrixXd& w) {
+    HeldOutResidual out;
+    out.flight = {0};
+    out.segments = {{e, w}};
+    out.scored = {{true, true, true, true, true, true}};
+    return out;
+  };
+  const HeldOutResidual baseline = held_out(residual, wrench);
+  const HeldOutScales scales = BaselineScales(baseline, 1);
+  const ComponentVector noise = ComponentVector::Zero();
+  const HeldOutGap base = ScoreHeldOut(baseline, scales, noise);
+  EXPECT_NEAR(base.whitened_ssr, 6 * 400, 1e-9);
+
+  Eigen::MatrixXd shrunk_residual = residual, shrunk_wrench = wrench;
+  shrunk_residual.col(5) *= 0.2;
+  shrunk_wrench.col(5) *= 0.2;
+  const HeldOutResidual shrunk = held_out(shrunk_residual, shrunk_wrench);
+  EXPECT_NEAR(ScoreHeldOut(shrunk, scales, noise).whitened_ssr, base.whitened_ssr, 1e-9);
+  EXPECT_NEAR(CompareHeldOut(baseline, shrunk, scales).mean_difference, 0.0, 1e-12);
+
+  Eigen::MatrixXd better_residual = residual;
+  better_residual.col(5) *= 0.5;
+  const HeldOutResidual better = held_out(better_residual, wrench);
+  EXPECT_NEAR(ScoreHeldOut(better, scales, noise).whitened_ssr, base.whitened_ssr - 0.75 * 400, 1e-9);
+  EXPECT_LT(CompareHeldOut(baseline, better, scales).mean_difference, -0.7);
+}
+
 }  // namespace rotorid::internal

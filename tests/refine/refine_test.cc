@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "refine/idim_residual.h"
 #include "rotorid/sim/presets.h"
@@ -168,6 +169,29 @@ TEST(RefineTest, AnchoredCriterionFindsNoLagThatIsNotThere) {
     EXPECT_LT(anchored.effects.Scalar("motor_tau_s"), 2.0 * anchored.effects_std.Scalar("motor_tau_s")) << seed;
     EXPECT_LT(anchored.effects.Scalar("motor_tau_s"), tls.effects.Scalar("motor_tau_s")) << seed;
   }
+}
+
+// A delay and a motor lag trade against each other (their phase lags add): when the flight cannot
+// separate them, the warning says what it does fix, their sum, and the sum is the truth's.
+TEST(RefineTest, ConfoundedDelayAndLagReportTheSumTheDataFix) {
+  Effects injected;
+  injected.Set("delay_s", 0.005);
+  injected.Set("motor_tau_s", 0.02);
+  const IdentificationResult linear = IdentifySimulated("B", 40.0, 5, injected);
+  RefineOptions options;
+  options.effects = {ParseEffectKind("delay"), ParseEffectKind("motor_lag")};
+  const RefineResult refined = Refine(linear, options);
+  const std::string marker = "what the data fix is delay_s + motor_tau_s = ";
+  std::string warning;
+  for (const std::string& w : refined.warnings)
+    if (w.find(marker) != std::string::npos) warning = w;
+  ASSERT_FALSE(warning.empty()) << "correlation " << refined.effect_correlation(0, 1);
+  double sum_ms = 0.0, std_ms = 0.0;
+  ASSERT_EQ(std::sscanf(warning.c_str() + warning.find(marker) + marker.size(), "%lf +- %lf ms", &sum_ms, &std_ms), 2)
+      << warning;
+  EXPECT_NEAR(sum_ms, 25.0, std::max(1.0, 3.0 * std_ms)) << warning;
+  // Far tighter than either part: that is what makes the sum worth stating.
+  EXPECT_LT(std_ms, 0.5 * 1e3 * refined.effects_std.Scalar("delay_s")) << warning;
 }
 
 struct RecoveryCase {
