@@ -7,6 +7,7 @@
 
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
+#include "rotorid/io/blackbox_segments.h"
 
 namespace rotorid {
 
@@ -19,6 +20,7 @@ std::string Meta(const FlightLog& log, const std::string& key) {
 
 std::string FormatName(const FlightLog& log) {
   if (Meta(log, "format") == "px4_ulog") return "px4_ulog";
+  if (Meta(log, "format") == "blackbox") return "blackbox";
   if (Meta(log, "source_format").rfind("crazyflie_usd", 0) == 0) return "crazyflie_usd";
   if (!Meta(log, "column_map").empty()) return "csv (column map)";
   return "csv";
@@ -48,6 +50,10 @@ void DescribeSources(const FlightLog& log, const std::string& format, FlightInpu
     s->rotor_signal_source = Meta(log, "rotor_signal_source");
     add("pose", Meta(log, "mocap"));
     add("voltage", Meta(log, "voltage_source"));
+  } else if (format == "blackbox") {
+    add("imu", Meta(log, "blackbox_gyro") + "; " + Meta(log, "blackbox_acc"));
+    s->rotor_signal_source = Meta(log, "blackbox_rotor");
+    if (log.voltage_v) add("voltage", Meta(log, "blackbox_voltage"));
   } else {
     if (format != "csv") add("column map", Meta(log, "column_map"));
     add("imu", "t, gyro_x..gyro_z, acc_x..acc_z");
@@ -133,7 +139,7 @@ FlightInputSummary DescribeFlightInput(const FlightLog& log, const std::string& 
 }
 
 SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const std::optional<TimeWindow>& window,
-                            SegmentMode mode, const SegmentationOptions& segmentation) {
+                            SegmentMode mode, const std::optional<SegmentationOptions>& segmentation_options) {
   SelectedFlight selected;
   FlightInputSummary& s = selected.summary;
   s = DescribeFlightInput(log, path);
@@ -163,7 +169,13 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
     return selected;
   }
 
-  const Segmentation segments = SegmentFlight(cut, segmentation);
+  // A blackbox log is an FPV quad, often thrown or self-launched: the general take-off margin
+  // would swallow its first, most excited second (docs/blackbox.md 4).
+  const bool thrown = !segmentation_options && s.format == "blackbox";
+  const SegmentationOptions segmentation = segmentation_options ? *segmentation_options
+                                           : thrown             ? ThrownQuadSegmentationOptions()
+                                                                : SegmentationOptions{};
+  const Segmentation segments = thrown ? SegmentThrownFlight(cut, segmentation) : SegmentFlight(cut, segmentation);
   for (const ExcludedSpan& e : segments.excluded)
     s.left_out.push_back({e.t_begin_s, e.t_end_s, ToString(e.reason), e.detail});
   std::sort(s.left_out.begin(), s.left_out.end(),

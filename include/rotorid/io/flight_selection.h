@@ -64,10 +64,12 @@ struct SelectedFlight {
 };
 
 // Cuts `log` (read from `path`) to `window`, then keeps its airborne, unsaturated stretches when
-// `mode` is kAuto. Throws rotorid::Error naming the file when the window lies outside the log or
-// nothing usable is left.
+// `mode` is kAuto. Without `segmentation` the log's format chooses: blackbox logs (thrown or
+// self-launched FPV quads) SegmentThrownFlight with ThrownQuadSegmentationOptions, every other
+// format SegmentFlight with the default options. Throws rotorid::Error naming the file when the
+// window lies outside the log or nothing usable is left.
 SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const std::optional<TimeWindow>& window,
-                            SegmentMode mode, const SegmentationOptions& segmentation = {});
+                            SegmentMode mode, const std::optional<SegmentationOptions>& segmentation = std::nullopt);
 
 // The summary alone, for a log used whole (e.g. the rotor signal of a log read without selection).
 FlightInputSummary DescribeFlightInput(const FlightLog& log, const std::string& path);
