@@ -2,8 +2,9 @@
 # The rotor-acceleration term of the TU Delft 3-inch quad (docs/blackbox.md 6): `rotorid refine
 # --effects rotor_inertia` on each log's kept segment (--segment auto), printed in the paper's
 # normalised form (B2 = J/I_zz, kd/I_zz, kt*d/I per axis) with the held-out relative errors on
-# LOG00230; the same with a 4x placeholder mass; the rotor speed shifted before processing (so that
-# Omega' moves with Omega); and the diagnosis of LOG00271 with LOG00230 held out.
+# LOG00230; the same with a 4x placeholder mass; with the refined delay, and as a cross-check the
+# rotor speed shifted before processing (Omega and Omega' together, as the refined delay moves
+# them); and the diagnosis of LOG00271 with LOG00230 held out.
 #
 #   bench/blackbox_rotor_inertia.sh [ROTORID=build/release/apps/rotorid] [OUT=/tmp/rotorid-bb-inertia]
 set -uo pipefail
@@ -56,7 +57,7 @@ done
   --json "$OUT/ri_271_heavy.json" -q 2>/dev/null
 summary "LOG00271, mass 1.2 kg" "$OUT/ri_271_heavy.json"
 
-echo "== with the refinement's delay (shifts Omega, not Omega')"
+echo "== with the refinement's delay (moves Omega and Omega')"
 for L in 271 281; do
   "$R" refine --vehicle "$V" --log "$D/LOG00$L.BFL" --validate-vehicle "$V" --validate-log "$D/LOG00230.BFL" \
     "${COMMON[@]}" --effects rotor_inertia,delay --json "$OUT/rid_$L.json" -q 2>/dev/null

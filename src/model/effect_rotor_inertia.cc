@@ -2,9 +2,9 @@
 // J sigma_i Omega_i z reacts on the body when the rotor speeds up and when the body turns it:
 //   tau = -J sum_i sigma_i (Omega_i' z + Omega_i w x z),   J = rotor_inertia_kgm2 >= 0
 // (rotor and propeller about the rotor axis). Omega_i' is the derivative of the filtered rotor
-// speed of the flight, taken before any rotor-signal effect: a refined delay shifts Omega_i but
-// not Omega_i'. Where the term is large (the TU Delft 3-inch quad, whose measured speed lags the
-// gyro by 11-16 ms) that matters: docs/blackbox.md 6 shifts the speed before processing instead.
+// speed after the rotor-signal effects (EffectiveRotorAtRows), so a refined delay or lag moves it
+// with Omega_i: where the term is large (the TU Delft 3-inch quad, whose measured speed lags the
+// gyro by 10-14 ms, docs/blackbox.md 6) the two must not disagree.
 
 #include "model/effect_adapter.h"
 #include "rotorid/core/vehicle.h"

@@ -7,6 +7,7 @@
 #include "refine/effect_rows.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/signal/butterworth.h"
+#include "rotorid/signal/differentiate.h"
 
 namespace rotorid {
 namespace {
@@ -67,11 +68,17 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
   const Eigen::Index rotors = flight.rotor_raw.cols(), n = flight.rotor_raw.rows();
   EffectiveRotor out;
   out.speed.resize(rows, rotors);
+  out.acceleration = Eigen::MatrixXd::Zero(rows, rotors);
+  const auto at_rows = [&](const Eigen::MatrixXd& series, Eigen::MatrixXd* sampled) {
+    for (int r = 0; r < rows; ++r) sampled->row(r) = series.row(flight.row_samples[r]);
+  };
   if (chain.empty()) {  // the flight's own rotor entries
-    for (int r = 0; r < rows; ++r) out.speed.row(r) = flight.rotor.row(flight.row_samples[r]);
+    at_rows(flight.rotor, &out.speed);
+    if (flight.rotor_acceleration.rows() == n) at_rows(flight.rotor_acceleration, &out.acceleration);
     return out;
   }
   out.derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
+  out.acceleration_derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
   Eigen::MatrixXd speed;
   for (size_t first = 0; first == 0 || first < coordinates.size(); first += kRotorJetSize) {
     std::vector<Eigen::Matrix<RotorJet, Eigen::Dynamic, 1>> jets(chain.size());
@@ -88,21 +95,18 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
       for (Eigen::Index k = 0; k < n; ++k)
         for (Eigen::Index r = 0; r < rotors; ++r) squared(k, r) = (signal(k, r) * signal(k, r)).a;
       speed = FilteredRotorSpeed(flight.filter, squared);
-      for (int r = 0; r < rows; ++r) out.speed.row(r) = speed.row(flight.row_samples[r]);
+      at_rows(speed, &out.speed);
+      at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration);
     }
     for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c) {
       Eigen::MatrixXd d_squared(n, rotors);
       for (Eigen::Index k = 0; k < n; ++k)
         for (Eigen::Index r = 0; r < rotors; ++r) d_squared(k, r) = (signal(k, r) * signal(k, r)).v[c - first];
-      const Eigen::MatrixXd filtered = FiltFiltColumns(flight.filter, d_squared);
-      for (int r = 0; r < rows; ++r) {
-        const int i = flight.row_samples[r];
-        for (Eigen::Index k = 0; k < rotors; ++k) {
-          // d sqrt(z) = dz / (2 sqrt(z)).
-          const double omega = speed(i, k);
-          out.derivative[c](r, k) = filtered(i, k) * (omega > 0.0 ? 0.5 / omega : 0.0);
-        }
-      }
+      // d sqrt(z) = dz / (2 sqrt(z)).
+      const Eigen::MatrixXd d_speed =
+          FiltFiltColumns(flight.filter, d_squared).cwiseProduct((speed.array() > 0.0).select(0.5 * speed.cwiseInverse(), 0.0));
+      at_rows(d_speed, &out.derivative[c]);
+      at_rows(FourthOrderCentralDifference(d_speed, flight.dt_s), &out.acceleration_derivative[c]);
     }
   }
   return out;

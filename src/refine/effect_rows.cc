@@ -62,12 +62,18 @@ Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, size_t fir
   const int rotors = flight_->vehicle.num_rotors();
   size_t last = first;
   if constexpr (!std::is_same_v<T, double>) last = std::min(coordinates_.size(), first + T::DIMENSION);
-  VectorT<T> omega(rotors);
-  for (int k = 0; k < rotors; ++k) omega[k] = T(rotor_->speed(row_sample, k));
+  VectorT<T> omega(rotors), omega_rate(rotors);
+  for (int k = 0; k < rotors; ++k) {
+    omega[k] = T(rotor_->speed(row_sample, k));
+    omega_rate[k] = T(rotor_->acceleration(row_sample, k));
+  }
   if constexpr (!std::is_same_v<T, double>)
     for (size_t c = first; c < last; ++c)
       if (const int d = coordinates_[c].rotor_derivative; d >= 0)
-        for (int k = 0; k < rotors; ++k) omega[k].v[c - first] = rotor_->derivative[d](row_sample, k);
+        for (int k = 0; k < rotors; ++k) {
+          omega[k].v[c - first] = rotor_->derivative[d](row_sample, k);
+          omega_rate[k].v[c - first] = rotor_->acceleration_derivative[d](row_sample, k);
+        }
   const int i = flight_->row_samples[row_sample];
   ImuSample<T> imu = LoggedImu<T>(*flight_, i);
   const std::vector<VectorT<T>> imu_values = StageValues<T>(imu_.chain, imu_.free_index, coordinates_, first, last);
@@ -75,7 +81,7 @@ Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, size_t fir
   Eigen::Matrix<T, 6, kNumIdimColumns> rows =
       IdimRows<T>(imu.angular_velocity, imu.angular_acceleration, imu.specific_force, omega, flight_->vehicle);
   if (wrench_.chain.kinds.empty()) return rows;
-  RotorSample<T> sample = FlightRotorSample<T>(*flight_, i, omega, imu.angular_velocity);
+  RotorSample<T> sample = FlightRotorSample<T>(*flight_, i, omega, omega_rate, imu.angular_velocity);
   const std::vector<VectorT<T>> values = StageValues<T>(wrench_.chain, wrench_.free_index, coordinates_, first, last);
   RotorWrenchTerms<T> terms(rotors);
   AddRotorWrench<T>(wrench_.chain.kinds, Pointers(values), sample, &terms);

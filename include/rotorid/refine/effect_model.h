@@ -25,10 +25,14 @@ Eigen::MatrixXd RotorSignalWithEffects(const ProcessedFlight& flight, const Effe
 
 // The rotor entries of the rows at the row samples with the rotor-signal effects applied, and
 // their derivatives (row sample x rotor) with respect to each scalar parameter of `free` (rotor-
-// signal effects, in that order, coordinates in order).
+// signal effects, in that order, coordinates in order); likewise the rotor acceleration Omega' of
+// that signal (the rotor-wrench effects' input), differentiated as ProcessFlight differentiates the
+// logged one, so that a delay or a lag moves Omega' with Omega.
 struct EffectiveRotor {
   Eigen::MatrixXd speed;
   std::vector<Eigen::MatrixXd> derivative;
+  Eigen::MatrixXd acceleration;
+  std::vector<Eigen::MatrixXd> acceleration_derivative;
 };
 EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects& effects,
                                     const std::vector<EffectKind>& free);
@@ -47,16 +51,17 @@ ImuSample<T> LoggedImu(const ProcessedFlight& flight, int i) {
   return s;
 }
 
-// What the rotor-wrench effects see at sample i of a flight: the rotor speeds acting `speed` (with
-// the rotor-signal effects), the corrected angular velocity `w`, the flight's rotor acceleration
+// What the rotor-wrench effects see at sample i of a flight: the rotor speeds acting `speed` and
+// their acceleration (with the rotor-signal effects), the corrected angular velocity `w`, the
 // velocity of O_d and rotor heights (zero or empty where the flight has none).
 template <typename T>
 RotorSample<T> FlightRotorSample(const ProcessedFlight& flight, int i, const Eigen::Matrix<T, Eigen::Dynamic, 1>& speed,
+                                 const Eigen::Matrix<T, Eigen::Dynamic, 1>& acceleration,
                                  const Eigen::Matrix<T, 3, 1>& w) {
   RotorSample<T> sample;
   sample.vehicle = &flight.vehicle;
   sample.speed = speed;
-  sample.acceleration = flight.rotor_acceleration.row(i).transpose().cast<T>();
+  sample.acceleration = acceleration;
   sample.angular_velocity = w;
   if (flight.velocity_mps) sample.velocity = flight.velocity_mps->row(i).transpose().cast<T>();
   if (flight.rotor_height_m) sample.height = flight.rotor_height_m->row(i).transpose().cast<T>();
