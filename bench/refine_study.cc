@@ -137,12 +137,12 @@ int main(int argc, char** argv) {
         }
         const double kt = v.parameters.rotor.kt;
         const double ixx = v.parameters.body.inertia(0, 0), izz = v.parameters.body.inertia(2, 2);
-        const int c0 = IdimSystem::ConfigColumn(0);
+        const int xx = linear.system.flight_body_columns[0][3], zz = linear.system.flight_body_columns[0][5];
         std::snprintf(buffer, sizeof(buffer), "%-22s %4d | %-44s | %-44s | %7.3f %7.3f %7.3f | %7.3f %7.3f %7.3f",
                       c.label.c_str(), seed, truth.c_str(), estimate.c_str(), RelErr(linear.solution.chi[0], kt),
-                      RelErr(linear.solution.chi[c0 + 3], ixx), RelErr(linear.solution.chi[c0 + 5], izz),
-                      RelErr(refined.refined.chi[0], kt), RelErr(refined.refined.chi[c0 + 3], ixx),
-                      RelErr(refined.refined.chi[c0 + 5], izz));
+                      RelErr(linear.solution.chi[xx], ixx), RelErr(linear.solution.chi[zz], izz),
+                      RelErr(refined.refined.chi[0], kt), RelErr(refined.refined.chi[xx], ixx),
+                      RelErr(refined.refined.chi[zz], izz));
         line = buffer;
       } catch (const std::exception& e) {
         line = c.label + " seed " + std::to_string(seed) + ": " + e.what();

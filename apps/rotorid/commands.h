@@ -49,6 +49,7 @@ struct IdentifyCliOptions {
   std::vector<std::string> fixed_zero;
   std::string rotor_signal = "auto";
   std::string column_map;
+  std::string first_moment = "shared";
   IdentifyOptions identify;
 };
 
@@ -57,6 +58,9 @@ struct IdentifyCliOptions {
 void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out);
 // Registers the signal-processing and TLS options.
 void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* options);
+// Registers --first-moment (identify, refine, delay: the commands whose every flight is one the
+// parameters are identified on, or whose held-out flights get their own first moment fitted).
+void AddFirstMomentOption(CLI::App* app, IdentifyCliOptions* options);
 // Turns the parsed strings into library options (throws rotorid::Error on invalid values).
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* options);
 FlightSourceOptions SourceOptions(const IdentifyCliOptions& options);
@@ -71,6 +75,11 @@ struct LoadedFlights {
 // naming the file at fault (UsageError for unpaired options).
 LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
 LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source);
+// Per-flight first moments: fits the first moment of each held-out flight (FitHeldOutFirstMoments)
+// into `parameters`, with the rows `effects` give; returns them as {name: value} (empty object
+// when the parameters share their first moments).
+nlohmann::json FitHeldOutFirstMomentsJson(std::vector<ProcessedFlight>* flights,
+                                          std::map<std::string, double>* parameters, const Effects& effects);
 // The effects an --effects value names. "all" leaves out the effects whose inputs a training flight
 // lacks (rotor_drag without a velocity, say), with a note on stderr unless quiet; an effect named
 // explicitly is kept, and the refinement refuses it with the reason.

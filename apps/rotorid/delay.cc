@@ -29,6 +29,7 @@ Command AddDelayCommand(CLI::App& root) {
       "the joint refinement");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
   AddIdentifyOptions(command.app, &options->identify);
+  AddFirstMomentOption(command.app, &options->identify);
   command.app->add_option("--min-s", options->delay.search.min_s, "smallest delay searched (s)")->capture_default_str();
   command.app->add_option("--max-s", options->delay.search.max_s, "largest delay searched (s)")->capture_default_str();
   command.app->add_option("--step-s", options->delay.search.step_s, "grid step of the global search (s)")
@@ -51,6 +52,7 @@ Command AddDelayCommand(CLI::App& root) {
     const nlohmann::json settings = {
         {"observation", ObservationOptionsJson(identify.observation)},
         {"tls", TlsOptionsJson(identify.tls)},
+        {"first_moment", FirstMomentName(identify.first_moment)},
         {"search_s", {options->delay.search.min_s, options->delay.search.max_s, options->delay.search.step_s}},
         {"with_motor_lag", options->delay.with_motor_lag}};
     nlohmann::json report = DelayJson(linear, estimate);

@@ -7,6 +7,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/refine/effect_model.h"
 #include "rotorid/report/input_json.h"
 #include "rotorid/report/json.h"
 
@@ -80,8 +81,18 @@ void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* o) {
   app->add_option("--column-map", o->column_map, "column map (YAML) for CSV exports of other tools");
 }
 
+void AddFirstMomentOption(CLI::App* app, IdentifyCliOptions* o) {
+  app->add_option("--first-moment", o->first_moment,
+                  "shared (default: the flights of a configuration share its first moment) or per-flight (each log "
+                  "has its own, <config>.flight<k>.ms_x with k from 1 in the order given: the battery moves between "
+                  "flights; held-out flights get theirs fitted)")
+      ->check(ParsesWith(ParseFirstMoment))
+      ->capture_default_str();
+}
+
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* o) {
   o->identify.tls.method = ParseTlsMethod(o->method);
+  o->identify.first_moment = ParseFirstMoment(o->first_moment);
   if (o->source != "imu" && o->source != "mocap")
     throw UsageError("--source must be imu or mocap, got '" + o->source + "'");
   o->identify.observation.source = o->source == "imu" ? DataSource::kImu : DataSource::kMocap;
@@ -127,7 +138,7 @@ LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const s
     SelectedFlight selected = SelectFlight(LoadFlightLog(log_paths[i], vehicle, source), log_paths[i], window, mode);
     if (!options.quiet) std::cout << selected.summary.ConsoleLine() << "\n";
     for (FlightLog& segment : selected.segments)
-      loaded.flights.push_back({vehicle, std::move(segment), weights.empty() ? 1.0 : weights[i]});
+      loaded.flights.push_back({vehicle, std::move(segment), weights.empty() ? 1.0 : weights[i], static_cast<int>(i)});
     loaded.inputs.push_back(std::move(selected.summary));
   }
   return loaded;
@@ -138,6 +149,18 @@ LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const s
 LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source) {
   return LoadFlights(options.vehicle_paths, options.log_paths, options.weights, options.windows, "--log", options,
                      source);
+}
+
+nlohmann::json FitHeldOutFirstMomentsJson(std::vector<ProcessedFlight>* flights,
+                                          std::map<std::string, double>* parameters, const Effects& effects) {
+  const std::vector<std::string> names =
+      FitHeldOutFirstMoments(flights, parameters, [&effects](const ProcessedFlight& f) {
+        // Without effects, the rows the linear identification used.
+        return effects.AllZero() ? BuildIdimMatrix(f) : BuildIdimMatrixWithEffects(f, effects);
+      });
+  nlohmann::json out = nlohmann::json::object();
+  for (const std::string& name : names) out[name] = parameters->at(name);
+  return out;
 }
 
 std::vector<EffectKind> EffectsForFlights(const std::string& list, const IdentificationResult& linear, bool quiet) {

@@ -24,6 +24,7 @@ Command AddIdentifyCommand(CLI::App& root) {
                           "multi-configuration TLS (repeat --vehicle/--log for configurations A and B)");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/false);
   AddIdentifyOptions(command.app, &options->identify);
+  AddFirstMomentOption(command.app, &options->identify);
   command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
@@ -37,7 +38,8 @@ Command AddIdentifyCommand(CLI::App& root) {
     progress.Finish();
     checks.push_back(CheckResidualSignature(result));
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
-                                     {"tls", TlsOptionsJson(identify.tls)}};
+                                     {"tls", TlsOptionsJson(identify.tls)},
+                                     {"first_moment", FirstMomentName(identify.first_moment)}};
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
                              {"command", "identify"},
                              {"settings", settings},

@@ -70,6 +70,7 @@ Command AddRefineCommand(CLI::App& root) {
       "refined results side by side");
   AddFlightOptions(command.app, &options->flights, /*held_out=*/true);
   AddIdentifyOptions(command.app, &options->identify);
+  AddFirstMomentOption(command.app, &options->identify);
   command.app
       ->add_option("--effects", options->effects,
                    "effects to estimate: all, none, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
@@ -110,6 +111,7 @@ Command AddRefineCommand(CLI::App& root) {
 
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)},
+                                     {"first_moment", FirstMomentName(identify.first_moment)},
                                      {"refine", RefineOptionsJson(refine)}};
     nlohmann::json report = {{"rotorid_version", kRotoridVersion},
                              {"command", "refine"},
@@ -118,15 +120,23 @@ Command AddRefineCommand(CLI::App& root) {
                              {"refined", RefinedJson(linear, refined)}};
     std::vector<std::optional<double>> held_out_linear, held_out_refined;
     std::vector<ProcessedFlight> held_out;
+    std::map<std::string, double> linear_values = NamedParameters(linear.system, linear.solution.chi);
+    std::map<std::string, double> refined_values = NamedParameters(linear.system, refined.refined.chi);
     if (!options->flights.validate_log_paths.empty()) {
       held_out = ProcessFlights(validation.flights, identify.observation);
-      held_out_linear = CombinedRelativeErrorPct(held_out, NamedParameters(linear.system, linear.solution.chi));
-      held_out_refined =
-          RelativeErrorWithEffects(held_out, NamedParameters(linear.system, refined.refined.chi), refined.effects);
+      // Per-flight first moments: each held-out flight's is fitted, for either parameter set.
+      const nlohmann::json linear_moments = FitHeldOutFirstMomentsJson(&held_out, &linear_values, Effects{});
+      held_out_linear = CombinedRelativeErrorPct(held_out, linear_values);
+      const nlohmann::json refined_moments = FitHeldOutFirstMomentsJson(&held_out, &refined_values, refined.effects);
+      held_out_refined = RelativeErrorWithEffects(held_out, refined_values, refined.effects);
       for (Check& c : CheckRelativeError(held_out_refined, "held-out refined", /*held_out=*/true))
         checks.push_back(std::move(c));
       report["held_out"] = {{"linear", {{"relative_error_pct", ComponentsJson(held_out_linear)}}},
                             {"refined", {{"relative_error_pct", ComponentsJson(held_out_refined)}}}};
+      if (!linear_moments.empty()) {
+        report["held_out"]["linear"]["first_moments"] = linear_moments;
+        report["held_out"]["refined"]["first_moments"] = refined_moments;
+      }
     }
     report["checks"] = ChecksJson(checks);
     AddCommonReportSections(*app, training, &validation, &report);
@@ -140,8 +150,7 @@ Command AddRefineCommand(CLI::App& root) {
     input.checks = checks;
     input.flights = ReportFlights(linear.flights, /*held_out=*/false);
     for (const ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) input.flights.push_back(f);
-    input.parameter_sets = {{"linear", NamedParameters(linear.system, linear.solution.chi), Effects()},
-                            {"refined", NamedParameters(linear.system, refined.refined.chi), refined.effects}};
+    input.parameter_sets = {{"linear", linear_values, Effects()}, {"refined", refined_values, refined.effects}};
     WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid refine: " << TlsMethodName(identify.tls.method) << " TLS, then Ceres with effects "

@@ -38,18 +38,19 @@ Command AddValidateCommand(CLI::App& root) {
     if (const std::string problem = source.Validate(); !problem.empty()) throw UsageError(problem);
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, source);
     const nlohmann::json params = ReadJsonFile(options->params_path);
-    const std::map<std::string, double> values =
-        ParameterValuesFromReport(params, options->params_path, options->block);
+    std::map<std::string, double> values = ParameterValuesFromReport(params, options->params_path, options->block);
     // Rows are built exactly as in the run that produced the parameters.
     const ObservationOptions observation = ObservationOptionsFromJson(
         params.contains("settings") && params["settings"].contains("observation") ? params["settings"]["observation"]
                                                                                   : nlohmann::json());
-    const std::vector<ProcessedFlight> flights = ProcessFlights(loaded.flights, observation);
+    std::vector<ProcessedFlight> flights = ProcessFlights(loaded.flights, observation);
     std::vector<Check> checks = CheckFlights(loaded.flights, flights);
     // Refined parameters are only valid together with their effects.
     const bool refined = options->block == "refined" || (options->block.empty() && params.contains("refined") &&
                                                          params["refined"].contains("parameters"));
     const Effects effects = refined ? EffectsFromReport(params) : Effects{};
+    // A report with per-flight first moments knows none of these flights' own: each is fitted.
+    const nlohmann::json first_moments = FitHeldOutFirstMomentsJson(&flights, &values, effects);
     const auto combined = RelativeErrorWithEffects(flights, values, effects);
     nlohmann::json per_flight = nlohmann::json::array();
     std::vector<FlightFit> fits;
@@ -67,6 +68,7 @@ Command AddValidateCommand(CLI::App& root) {
                              {"settings", settings},
                              {"relative_error_pct", ComponentsJson(combined)},
                              {"flights", per_flight}};
+    if (!first_moments.empty()) report["first_moments"] = first_moments;
     AddCommonReportSections(*app, loaded, nullptr, &report);
     for (Check& c : CheckRelativeError(combined, "validation", /*held_out=*/true)) checks.push_back(std::move(c));
     report["checks"] = ChecksJson(checks);
@@ -78,6 +80,7 @@ Command AddValidateCommand(CLI::App& root) {
     input.flights = ReportFlights(flights, /*held_out=*/true);
     // The saved parameters (and the refined effects) are drawn beside each other.
     input.parameter_sets = ParameterSetsFromReport(params, options->params_path);
+    for (ParameterSet& set : input.parameter_sets) FitHeldOutFirstMomentsJson(&flights, &set.values, set.effects);
     const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid validate: parameters of " << options->params_path << " on " << flights.size()
@@ -86,6 +89,9 @@ Command AddValidateCommand(CLI::App& root) {
         std::cout << "  " << fit.source << " (" << fit.config << "): " << FormatComponents(fit.relative_error_pct)
                   << "\n";
       std::cout << "relative error (paper Table III): " << FormatComponents(combined) << "\n";
+      if (!first_moments.empty())
+        std::cout << "first moments fitted on these flights (the report's are per flight): " << first_moments.dump()
+                  << "\n";
       if (!report_path.empty()) std::cout << "report: " << report_path << "\n";
     }
     return PrintChecks(checks, options->flights.quiet);

@@ -20,6 +20,8 @@ namespace rotorid {
 
 std::string DiagnosisOptions::Validate() const {
   if (const std::string problem = identify.Validate(); !problem.empty()) return problem;
+  // Its folds and held-out flights would each need a first moment of their own.
+  if (identify.first_moment == FirstMoment::kPerFlight) return "the diagnosis takes shared first moments only";
   if (const std::string problem = location.Validate(); !problem.empty()) return problem;
   for (size_t a = 0; a < candidates.size(); ++a)
     for (size_t b = a + 1; b < candidates.size(); ++b)

@@ -117,7 +117,7 @@ std::vector<std::optional<double>> GapFromSums(const ComponentVector& residual_s
 
 ComponentVector NoiseResidualSquares(const ProcessedFlight& flight, const std::map<std::string, double>& parameters) {
   const std::vector<Eigen::MatrixXd> covariance = IdimNoiseCovariance(flight);
-  const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+  const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
   ComponentVector out;
   for (int j = 0; j < kComponents; ++j) out[j] = std::max(0.0, chi_t.dot(covariance[j] * chi_t));
   return out;

@@ -20,11 +20,11 @@ namespace rotorid::internal {
 namespace {
 
 // Column of W that a named parameter multiplies in this flight, or -1.
-int ColumnOf(const std::string& name, const Vehicle& vehicle) {
+int ColumnOf(const std::string& name, const ProcessedFlight& flight) {
   for (int k = 0; k < kNumRotorCoefficients; ++k)
     if (name == kRotorCoefficientNames[k]) return k;
   for (int k = 0; k < kNumBodyParameters; ++k)
-    if (name == vehicle.name + "." + kBodyParameterNames[k]) return kNumRotorCoefficients + k;
+    if (name == BodyParameterName(flight, k)) return kNumRotorCoefficients + k;
   return -1;
 }
 
@@ -53,7 +53,7 @@ Eigen::MatrixXd NormalInverse(const Eigen::MatrixXd& gram) {
 FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
                           const Effects& effects) {
   const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(flight, effects);
-  const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+  const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
   const Eigen::Index rows = w.rows() / kNumWrenchComponents;
   FlightResidual out;
   out.residual.resize(rows, kNumWrenchComponents);
@@ -104,7 +104,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   for (EffectKind kind : kinds)
     if (kind->stage() == EffectStage::kRotorSignal) rotor_kinds.push_back(kind);
   for (const ProcessedFlight& flight : flights) {
-    const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+    const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
     const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(flight, effects);
     const Eigen::Index rows = w.rows();
     const Eigen::VectorXd rho = w * chi_t;
@@ -130,7 +130,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
       out.residual[offset + i] = rho[i] / scale[j];
     }
     for (Eigen::Index c = 0; c < p; ++c) {
-      const int column = ColumnOf(free_parameters[c], flight.vehicle);
+      const int column = ColumnOf(free_parameters[c], flight);
       if (column < 0) continue;
       for (Eigen::Index i = 0; i < rows; ++i)
         out.parameter_jacobian(offset + i, c) = w(i, column) / scale[i % kNumWrenchComponents];

@@ -1,5 +1,6 @@
 #include "rotorid/ident/identify.h"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
 
@@ -21,12 +22,21 @@ Eigen::VectorXd IdentificationResult::ChiT() const {
   return chi_t;
 }
 
+const char* FirstMomentName(FirstMoment mode) { return mode == FirstMoment::kShared ? "shared" : "per-flight"; }
+
+FirstMoment ParseFirstMoment(const std::string& name) {
+  if (name == "shared") return FirstMoment::kShared;
+  if (name == "per-flight") return FirstMoment::kPerFlight;
+  throw Error("unknown first-moment mode '" + name + "'; use 'shared' (default) or 'per-flight'");
+}
+
 std::vector<ProcessedFlight> ProcessFlights(const std::vector<FlightData>& flights, const ObservationOptions& options,
                                             const StepProgress& progress) {
   std::vector<ProcessedFlight> out;
   out.reserve(flights.size());
   for (const FlightData& f : flights) {
     out.push_back(ProcessFlight(f.log, f.vehicle, f.weight, options));
+    out.back().log_index = f.log_index;
     if (progress) progress(static_cast<int>(out.size()), static_cast<int>(flights.size()));
   }
   return out;
@@ -50,7 +60,21 @@ Excitation MeasureExcitation(const ProcessedFlight& flight) {
   return e;
 }
 
-Eigen::VectorXd FlightChiT(const Vehicle& vehicle, const std::map<std::string, double>& parameters) {
+void LabelFirstMoments(FirstMoment mode, std::vector<ProcessedFlight>* flights) {
+  std::map<std::string, std::map<int, int>> number;  // per configuration: log -> k
+  std::map<std::string, int> unindexed;              // per configuration: logs without an index
+  for (ProcessedFlight& f : *flights) {
+    f.first_moment_label.clear();
+    if (mode == FirstMoment::kShared) continue;
+    std::map<int, int>& logs = number[f.vehicle.name];
+    // Flights without a log index get negative keys of their own, after the ones seen so far.
+    const int log = f.log_index >= 0 ? f.log_index : -1 - unindexed[f.vehicle.name]++;
+    const int k = logs.emplace(log, static_cast<int>(logs.size()) + 1).first->second;
+    f.first_moment_label = "flight" + std::to_string(k);
+  }
+}
+
+Eigen::VectorXd FlightChiT(const ProcessedFlight& flight, const std::map<std::string, double>& parameters) {
   Eigen::VectorXd chi_t(kNumIdimColumns);
   auto get = [&](const std::string& name) {
     const auto it = parameters.find(name);
@@ -59,9 +83,63 @@ Eigen::VectorXd FlightChiT(const Vehicle& vehicle, const std::map<std::string, d
   };
   chi_t[0] = get("kt");
   chi_t[1] = get("kd");
-  for (int k = 0; k < kNumBodyParameters; ++k) chi_t[2 + k] = get(vehicle.name + "." + kBodyParameterNames[k]);
+  for (int k = 0; k < kNumBodyParameters; ++k) chi_t[2 + k] = get(BodyParameterName(flight, k));
   chi_t[kNumIdimColumns - 1] = 1.0;
   return chi_t;
+}
+
+std::vector<std::string> OwnFirstMomentOwners(const std::string& config, const std::vector<std::string>& names) {
+  std::vector<std::string> owners;
+  const std::string prefix = config + ".", suffix = ".ms_x";
+  for (const std::string& name : names)
+    if (name.size() > prefix.size() + suffix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+      owners.push_back(name.substr(0, name.size() - suffix.size()));
+  return owners;
+}
+
+std::vector<std::string> FitHeldOutFirstMoments(std::vector<ProcessedFlight>* flights,
+                                                std::map<std::string, double>* parameters,
+                                                const std::function<Eigen::MatrixXd(const ProcessedFlight&)>& rows) {
+  std::vector<std::string> added;
+  const std::map<std::string, double> identified = *parameters;
+  std::map<std::string, int> count;
+  for (ProcessedFlight& f : *flights) {
+    f.first_moment_label.clear();
+    const std::string& config = f.vehicle.name;
+    if (identified.count(config + ".ms_x")) continue;
+    std::vector<std::string> names;
+    for (const auto& entry : identified) names.push_back(entry.first);
+    const std::vector<std::string> owners = OwnFirstMomentOwners(config, names);
+    if (owners.empty()) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const std::string& owner : owners)
+      for (int a = 0; a < 3; ++a) mean[a] += identified.at(owner + "." + kBodyParameterNames[a]) / owners.size();
+    f.first_moment_label = "held_out" + std::to_string(++count[config]);
+    for (int a = 0; a < 3; ++a) {
+      added.push_back(BodyParameterName(f, a));
+      (*parameters)[added.back()] = mean[a];
+    }
+    const Eigen::MatrixXd w = rows(f);
+    for (int pass = 0; pass < 2; ++pass) {
+      const Eigen::VectorXd rho = w * FlightChiT(f, *parameters);
+      Eigen::Matrix<double, 6, 1> inverse_variance = Eigen::Matrix<double, 6, 1>::Zero();
+      for (Eigen::Index i = 0; i < rho.size(); ++i) inverse_variance[i % 6] += rho[i] * rho[i];
+      for (int j = 0; j < 6; ++j)
+        inverse_variance[j] = inverse_variance[j] > 0.0 ? (rho.size() / 6) / inverse_variance[j] : 0.0;
+      Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+      for (Eigen::Index i = 0; i < rho.size(); ++i) {
+        const Eigen::Vector3d column = w.row(i).segment<3>(kNumRotorCoefficients).transpose();
+        normal += inverse_variance[i % 6] * column * column.transpose();
+        gradient += inverse_variance[i % 6] * column * rho[i];
+      }
+      const Eigen::Vector3d step = -normal.ldlt().solve(gradient);
+      if (!step.allFinite()) throw Error(f.source + ": its first moment cannot be fitted (no excitation)");
+      for (int a = 0; a < 3; ++a) (*parameters)[BodyParameterName(f, a)] += step[a];
+    }
+  }
+  return added;
 }
 
 FlightFit FitFlight(const ProcessedFlight& flight, const std::map<std::string, double>& parameters) {
@@ -74,7 +152,7 @@ FlightFit FitFlight(const ProcessedFlight& flight, const std::map<std::string, d
   fit.duration_s = flight.t_s.size() > 1 ? flight.t_s[flight.t_s.size() - 1] - flight.t_s[0] : 0.0;
   fit.excitation = MeasureExcitation(flight);
   const Eigen::MatrixXd w = BuildIdimMatrix(flight);
-  const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+  const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
   fit.relative_error_pct = RelativeErrorPct(w, chi_t);
   const Eigen::VectorXd rho = w * chi_t;
   for (Eigen::Index i = 0; i < rho.size(); ++i)
@@ -93,7 +171,7 @@ std::vector<std::optional<double>> CombinedRelativeErrorPct(const std::vector<Pr
   int row = 0;
   for (const ProcessedFlight& f : flights) {
     const Eigen::MatrixXd w = BuildIdimMatrix(f);
-    const Eigen::VectorXd chi_t = FlightChiT(f.vehicle, parameters);
+    const Eigen::VectorXd chi_t = FlightChiT(f, parameters);
     // Store rho in column 11 and the rotor wrench in column 0 with unit coefficients.
     for (Eigen::Index i = 0; i < w.rows(); ++i) {
       stacked.row(row + i).setZero();
@@ -124,6 +202,7 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
   IdentificationResult result;
   result.options = options;
   result.flights = std::move(flights);
+  LabelFirstMoments(options.first_moment, &result.flights);
   result.system = BuildIdimSystem(result.flights);
   if (progress) progress(1, 2);
   result.solution = SolveIdim(result.system, options.tls);
@@ -160,7 +239,7 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
   for (size_t c = 0; c < result.system.config_names.size(); ++c) {
     const std::string& config = result.system.config_names[c];
     for (int axis = 0; axis < 2; ++axis) {
-      const int k = IdimSystem::ConfigColumn(static_cast<int>(c)) + 3 + axis;
+      const int k = result.system.Column(config + "." + kBodyParameterNames[3 + axis]);
       if (solution.essential[k]) continue;
       double rms = 0.0;
       for (const FlightFit& fit : result.per_flight)

@@ -4,6 +4,7 @@
 
 #include "rotorid/core/error.h"
 #include "rotorid/model/effects.h"
+#include "rotorid/model/parameters.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/signal/differentiate.h"
@@ -12,6 +13,11 @@
 namespace rotorid {
 
 const char* DataSourceName(DataSource source) { return source == DataSource::kImu ? "imu" : "mocap"; }
+
+std::string BodyParameterName(const ProcessedFlight& flight, int k) {
+  const bool own = k < 3 && !flight.first_moment_label.empty();
+  return flight.vehicle.name + "." + (own ? flight.first_moment_label + "." : "") + kBodyParameterNames[k];
+}
 
 std::string ObservationOptions::Validate() const {
   if (filter.band != FilterBand::kLowPass) return "the observation filter must be a low-pass";

@@ -28,35 +28,72 @@ std::string TlsOptions::Validate() const {
   return {};
 }
 
-int IdimSystem::SystemColumn(int c, int k) const {
+int IdimSystem::Column(const std::string& name) const {
+  const auto it = std::find(parameter_names.begin(), parameter_names.end(), name);
+  return it == parameter_names.end() ? -1 : static_cast<int>(it - parameter_names.begin());
+}
+
+int IdimSystem::SystemColumn(int f, int k) const {
   if (k < kNumRotorCoefficients) return k;
-  if (k < kNumRotorCoefficients + kNumBodyParameters) return ConfigColumn(c) + k - kNumRotorCoefficients;
+  if (k < kNumRotorCoefficients + kNumBodyParameters) return flight_body_columns[f][k - kNumRotorCoefficients];
   return num_parameters();
 }
 
-void IdimSystem::PlaceFlightRows(int c, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const {
-  for (int k = 0; k < kNumIdimColumns; ++k) w->block(first_row, SystemColumn(c, k), wf.rows(), 1) = wf.col(k);
+void IdimSystem::PlaceFlightRows(int f, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const {
+  for (int k = 0; k < kNumIdimColumns; ++k) w->block(first_row, SystemColumn(f, k), wf.rows(), 1) = wf.col(k);
 }
 
-IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
-  if (flights.empty()) throw Error("no flights to identify from");
-  IdimSystem system;
+namespace {
+
+// Configurations, parameter names and each flight's body columns: per configuration the first
+// moments of its labels in the order they first appear (one unlabelled set when the flights share
+// it), then its inertia.
+void LayOutColumns(const std::vector<ProcessedFlight>& flights, IdimSystem* system) {
   std::map<std::string, int> config_index;
   std::map<std::string, const Vehicle*> config_vehicle;
   for (const ProcessedFlight& f : flights) {
-    auto [it, inserted] = config_index.emplace(f.vehicle.name, static_cast<int>(system.config_names.size()));
+    auto [it, inserted] = config_index.emplace(f.vehicle.name, static_cast<int>(system->config_names.size()));
     if (inserted) {
-      system.config_names.push_back(f.vehicle.name);
+      system->config_names.push_back(f.vehicle.name);
       config_vehicle[f.vehicle.name] = &f.vehicle;
     } else if (config_vehicle[f.vehicle.name]->mass_kg != f.vehicle.mass_kg) {
       throw Error("vehicle name '" + f.vehicle.name +
                   "' is used with two different masses; give each configuration its own name");
     }
-    system.flight_config.push_back(it->second);
-    system.flight_weight.push_back(f.weight);
-    system.flight_source.push_back(f.source);
+    system->flight_config.push_back(it->second);
+    system->flight_weight.push_back(f.weight);
+    system->flight_source.push_back(f.source);
   }
-  system.parameter_names = ParameterNames(system.config_names);
+  system->parameter_names.assign(kRotorCoefficientNames.begin(), kRotorCoefficientNames.end());
+  system->flight_body_columns.resize(flights.size());
+  for (int c = 0; c < static_cast<int>(system->config_names.size()); ++c) {
+    std::map<std::string, int> label_column;  // first first-moment column of each label
+    std::vector<size_t> members;
+    for (size_t f = 0; f < flights.size(); ++f) {
+      if (system->flight_config[f] != c) continue;
+      members.push_back(f);
+      auto [it, inserted] = label_column.emplace(flights[f].first_moment_label, system->num_parameters());
+      if (inserted)
+        for (int k = 0; k < 3; ++k) system->parameter_names.push_back(BodyParameterName(flights[f], k));
+      for (int k = 0; k < 3; ++k) system->flight_body_columns[f][k] = it->second + k;
+    }
+    if (label_column.count("") && label_column.size() > 1)
+      throw Error("configuration '" + system->config_names[c] +
+                  "': some flights have their own first moment and others share one");
+    const int inertia = system->num_parameters();
+    for (int k = 3; k < kNumBodyParameters; ++k) {
+      system->parameter_names.push_back(BodyParameterName(flights[members.front()], k));
+      for (size_t f : members) system->flight_body_columns[f][k] = inertia + k - 3;
+    }
+  }
+}
+
+}  // namespace
+
+IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
+  if (flights.empty()) throw Error("no flights to identify from");
+  IdimSystem system;
+  LayOutColumns(flights, &system);
   const int p = system.num_parameters();
   int total_rows = 0;
   for (const ProcessedFlight& f : flights) total_rows += 6 * f.num_rows_samples();
@@ -65,9 +102,8 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
   system.row_sample.reserve(total_rows);
   int row = 0;
   for (int f = 0; f < static_cast<int>(flights.size()); ++f) {
-    const int c = system.flight_config[f];
     const Eigen::MatrixXd wf = BuildIdimMatrix(flights[f]);
-    system.PlaceFlightRows(c, wf, row, &system.w);
+    system.PlaceFlightRows(f, wf, row, &system.w);
     for (int i = 0; i < wf.rows(); ++i) {
       system.row_group.push_back(6 * f + i % 6);
       system.row_sample.push_back(i / 6);
@@ -77,7 +113,7 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
       Eigen::MatrixXd mapped = Eigen::MatrixXd::Zero(p + 1, p + 1);
       for (int a = 0; a < kNumIdimColumns; ++a)
         for (int b = 0; b < kNumIdimColumns; ++b)
-          mapped(system.SystemColumn(c, a), system.SystemColumn(c, b)) += cov(a, b);
+          mapped(system.SystemColumn(f, a), system.SystemColumn(f, b)) += cov(a, b);
       system.group_noise_cov.push_back(mapped);
     }
   }

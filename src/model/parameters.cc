@@ -24,11 +24,4 @@ BodyParameters AddPointMass(const BodyParameters& body, double mass_kg, const Ei
   return out;
 }
 
-std::vector<std::string> ParameterNames(const std::vector<std::string>& config_names) {
-  std::vector<std::string> names(kRotorCoefficientNames.begin(), kRotorCoefficientNames.end());
-  for (const auto& config : config_names)
-    for (const char* body_name : kBodyParameterNames) names.push_back(config + "." + body_name);
-  return names;
-}
-
 }  // namespace rotorid

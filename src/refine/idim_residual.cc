@@ -87,13 +87,14 @@ std::shared_ptr<const RotorSignalCache::State> RotorSignalCache::Get(const Effec
 }
 
 IdimResidualBlock::IdimResidualBlock(const ProcessedFlight* flight, const RotorSignalCache* rotor,
-                                     const CriterionContext* context, const EffectBlocks* blocks, int config, int first,
-                                     int count, Eigen::VectorXd sqrt_weight)
+                                     const CriterionContext* context, const EffectBlocks* blocks,
+                                     const std::array<int, kNumBodyParameters>& body_columns, int first, int count,
+                                     Eigen::VectorXd sqrt_weight)
     : flight_(flight),
       rotor_(rotor),
       context_(context),
       blocks_(blocks),
-      config_(config),
+      body_columns_(body_columns),
       first_(first),
       count_(count),
       sqrt_weight_(std::move(sqrt_weight)) {
@@ -139,7 +140,6 @@ template <typename T>
 void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate, double* residuals,
                                      double** jacobians) const {
   const int p = context_->num_parameters;
-  const int c0 = IdimSystem::ConfigColumn(config_);
   const std::vector<EffectRows::Coordinate>& coordinates = point.rows->coordinates();
   size_t last_coordinate = first_coordinate;
   if constexpr (!std::is_same_v<T, double>)
@@ -159,7 +159,7 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
         for (int k = 0; k < p; ++k) j[k] = -residuals[out] * point.n_chi[k] / (context_->total_rows * point.d_sq);
         j[0] += scale * ScalarPart(rows(c, 0));
         j[1] += scale * ScalarPart(rows(c, 1));
-        for (int k = 0; k < kNumBodyParameters; ++k) j[c0 + k] += scale * ScalarPart(rows(c, 2 + k));
+        for (int k = 0; k < kNumBodyParameters; ++k) j[body_columns_[k]] += scale * ScalarPart(rows(c, 2 + k));
         for (int k = 0; k < p; ++k) j[k] *= context_->chi_scale[k];
       }
       if constexpr (!std::is_same_v<T, double>)
@@ -186,8 +186,10 @@ bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residu
   point.d_sq = chi_t.dot(point.n_chi) / context_->total_rows;
   if (!(point.d_sq > 0.0)) return false;
   point.d = std::sqrt(point.d_sq);
-  const int c0 = IdimSystem::ConfigColumn(config_);
-  point.flight_chi << chi_t[0], chi_t[1], chi_t.segment(c0, kNumBodyParameters), 1.0;
+  point.flight_chi[0] = chi_t[0];
+  point.flight_chi[1] = chi_t[1];
+  for (int k = 0; k < kNumBodyParameters; ++k) point.flight_chi[kNumRotorCoefficients + k] = chi_t[body_columns_[k]];
+  point.flight_chi[kNumIdimColumns - 1] = 1.0;
   const Effects effects = blocks_->At(parameters, flight_->vehicle);
   point.rotor = rotor_->Get(effects);
   point.rows = std::make_unique<EffectRows>(flight_, effects, blocks_->free, &point.rotor->rotor);

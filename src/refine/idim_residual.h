@@ -97,7 +97,8 @@ struct CriterionContext {
 class IdimResidualBlock : public ceres::CostFunction {
  public:
   IdimResidualBlock(const ProcessedFlight* flight, const RotorSignalCache* rotor, const CriterionContext* context,
-                    const EffectBlocks* blocks, int config, int first, int count, Eigen::VectorXd sqrt_weight);
+                    const EffectBlocks* blocks, const std::array<int, kNumBodyParameters>& body_columns, int first,
+                    int count, Eigen::VectorXd sqrt_weight);
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
@@ -110,7 +111,8 @@ class IdimResidualBlock : public ceres::CostFunction {
   const RotorSignalCache* rotor_;
   const CriterionContext* context_;
   const EffectBlocks* blocks_;
-  int config_, first_, count_;
+  std::array<int, kNumBodyParameters> body_columns_;  // the flight's body parameters' chi coordinates
+  int first_, count_;
   Eigen::VectorXd sqrt_weight_;
 };
 

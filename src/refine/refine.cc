@@ -58,8 +58,7 @@ std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<Pr
                                                             const std::map<std::string, double>& parameters,
                                                             const Effects& effects) {
   RelativeErrorSums sums;
-  for (const ProcessedFlight& f : flights)
-    sums.Add(BuildIdimMatrixWithEffects(f, effects), FlightChiT(f.vehicle, parameters));
+  for (const ProcessedFlight& f : flights) sums.Add(BuildIdimMatrixWithEffects(f, effects), FlightChiT(f, parameters));
   return sums.Pct();
 }
 
@@ -72,7 +71,7 @@ Eigen::MatrixXd SystemRowsWithEffects(const IdentificationResult& linear, const 
   Eigen::Index row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
     const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear.flights[f], effects);
-    system.PlaceFlightRows(system.flight_config[f], wf, row, &w);
+    system.PlaceFlightRows(f, wf, row, &w);
     row += wf.rows();
   }
   return w;
@@ -314,10 +313,10 @@ void AddRowResiduals(const IdentificationResult& linear, const TlsSolution& tls,
       ceres::LossFunction* loss = nullptr;
       if (options.robust_loss == "huber") loss = new ceres::HuberLoss(options.robust_scale);
       if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
-      ep->problem->AddResidualBlock(
-          new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context, &ep->effect_blocks,
-                                system.flight_config[f], first, count, sqrt_weight.segment(row + 6 * first, 6 * count)),
-          loss, ep->blocks_of_residual);
+      ep->problem->AddResidualBlock(new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context,
+                                                          &ep->effect_blocks, system.flight_body_columns[f], first,
+                                                          count, sqrt_weight.segment(row + 6 * first, 6 * count)),
+                                    loss, ep->blocks_of_residual);
     }
     row += 6 * flight.num_rows_samples();
   }

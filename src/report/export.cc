@@ -6,12 +6,13 @@
 #include <sstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
+#include "rotorid/ident/identify.h"
+#include "rotorid/model/parameters.h"
 
 namespace rotorid {
 
 namespace {
-
-constexpr const char* kBodyNames[] = {"ms_x", "ms_y", "ms_z", "I_xx", "I_yy", "I_zz", "I_xy", "I_xz", "I_yz"};
 
 std::string PreciseNumber(double x) {
   std::ostringstream out;
@@ -60,6 +61,29 @@ std::string MotorPlugin(const IdentifiedModel& model, int i) {
   return xml + "    </plugin>\n";
 }
 
+// Per-flight first moments: a simulator has one centre of mass, so the export takes their mean.
+void SetMeanFirstMoment(IdentifiedModel* model) {
+  const std::string config = model->vehicle.name;
+  if (model->parameters.count(config + ".ms_x")) return;
+  std::vector<std::string> names;
+  for (const auto& entry : model->parameters) names.push_back(entry.first);
+  const std::vector<std::string> owners = OwnFirstMomentOwners(config, names);
+  if (owners.empty()) return;
+  double spread_m = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::VectorXd values(static_cast<Eigen::Index>(owners.size()));
+    for (size_t k = 0; k < owners.size(); ++k)
+      values[static_cast<Eigen::Index>(k)] = model->parameters.at(owners[k] + "." + kBodyParameterNames[a]).value;
+    const double mean = values.mean();
+    const double spread = std::sqrt((values.array() - mean).square().mean());
+    model->parameters[config + "." + kBodyParameterNames[a]] = {mean, spread, true};
+    spread_m = std::max(spread_m, (values.maxCoeff() - values.minCoeff()) / model->vehicle.mass_kg);
+  }
+  model->note = "first moment: the mean of " + std::to_string(owners.size()) + " per-flight first moments (" + config +
+                ".flight<k>.ms_*; std: their spread), whose centres of mass differ by up to " +
+                ShortNumber(1000.0 * spread_m) + " mm along an axis";
+}
+
 }  // namespace
 
 double IdentifiedModel::Value(const std::string& name) const {
@@ -90,6 +114,7 @@ IdentifiedModel IdentifiedModelFromReport(const nlohmann::json& report, const st
   if (!(model.Value("kt") > 0.0)) throw Error(source + ": the report has no positive kt");
   if (!model.parameters.count(vehicle.name + ".I_xx"))
     throw Error(source + ": no parameters of configuration '" + vehicle.name + "' (the vehicle file's name)");
+  SetMeanFirstMoment(&model);
   // Effects the refinement estimated (a report lists the others as disabled).
   if (model.block == "refined" && report["refined"].contains("effects"))
     for (const auto& [name, effect] : report["refined"]["effects"].items())
@@ -119,8 +144,9 @@ std::string GazeboSdf(const IdentifiedModel& model) {
   std::string xml = "<?xml version=\"1.0\"?>\n<!-- rotorid export: " + model.source + " (" + model.block +
                     " parameters), vehicle '" + model.vehicle.name +
                     "'. Inertia about the centre of mass, in the "
-                    "body frame (FLU). -->\n<sdf version=\"1.6\">\n  <model name=\"" +
-                    model.vehicle.name + "\">\n";
+                    "body frame (FLU)." +
+                    (model.note.empty() ? "" : " " + model.note + ".") +
+                    " -->\n<sdf version=\"1.6\">\n  <model name=\"" + model.vehicle.name + "\">\n";
   xml += "    <link name=\"base_link\">\n      <inertial>\n";
   xml += Element("pose",
                  PreciseNumber(p.centre_of_mass_m.x()) + " " + PreciseNumber(p.centre_of_mass_m.y()) + " " +
@@ -152,6 +178,7 @@ std::string Px4SihParameters(const IdentifiedModel& model) {
   const double w2 = model.max_rotor_speed_radps * model.max_rotor_speed_radps;
   std::string out = "# rotorid export: " + model.source + " (" + model.block + " parameters), vehicle '" +
                     model.vehicle.name + "', max rotor speed " + PreciseNumber(model.max_rotor_speed_radps) + " rad/s\n";
+  if (!model.note.empty()) out += "# " + model.note + "\n";
   const auto set = [&out](const std::string& name, double value) {
     out += "param set " + name + " " + PreciseNumber(value) + "\n";
   };
@@ -175,7 +202,9 @@ std::string ModelYaml(const IdentifiedModel& model) {
   out << std::setprecision(12);
   out << "# rotorid export: every parameter and effect with its std\nsource: \"" << model.source
       << "\"\nblock: " << model.block << "\nvehicle: " << model.vehicle.name << "\nmass: " << model.vehicle.mass_kg
-      << "\nparameters:\n";
+      << "\n";
+  if (!model.note.empty()) out << "note: \"" << model.note << "\"\n";
+  out << "parameters:\n";
   for (const auto& [name, v] : model.parameters)
     out << "  " << name << ": {value: " << v.value << ", std: " << v.std
         << ", essential: " << (v.essential ? "true" : "false") << "}\n";

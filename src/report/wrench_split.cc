@@ -9,7 +9,7 @@ namespace rotorid {
 
 WrenchSplit ComputeWrenchSplit(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
                                const Effects& effects) {
-  const Eigen::VectorXd chi_t = FlightChiT(flight.vehicle, parameters);
+  const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
   // Without effects the plain rows are the ones the linear identification used.
   const Eigen::MatrixXd w =
       effects.AllZero() ? BuildIdimMatrix(flight) : BuildIdimMatrixWithEffects(flight, effects);

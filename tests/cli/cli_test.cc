@@ -180,6 +180,51 @@ TEST_F(CliTest, BadVehicleFileIsNamed) {
   EXPECT_NE(r.err.find("spin"), std::string::npos) << r.err;
 }
 
+// --first-moment per-flight: each log of a configuration has its own first moment, named
+// <config>.flight<k>.ms_x in the order given; validate fits a new flight's own, export takes the mean.
+TEST_F(CliTest, PerFlightFirstMomentNamesEachFlight) {
+  const auto r = RunRotorid({"identify", "--vehicle", Path("B.yaml"), "--log", Path("train.csv"), "--vehicle",
+                             Path("B.yaml"), "--log", Path("val.csv"), "--first-moment", "per-flight", "--json",
+                             Path("per_flight.json"), "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = LoadJson(Path("per_flight.json"));
+  const nlohmann::json truth = LoadJson(Path("train_truth.json"));
+  const nlohmann::json& parameters = report["linear"]["parameters"];
+  EXPECT_EQ(report["settings"]["first_moment"], "per-flight");
+  EXPECT_FALSE(parameters.contains("B.ms_x"));
+  for (const char* name : {"B.flight1.ms_x", "B.flight1.ms_y", "B.flight1.ms_z", "B.flight2.ms_x", "B.flight2.ms_y",
+                           "B.flight2.ms_z", "B.I_xx"}) {
+    ASSERT_TRUE(parameters.contains(name)) << name;
+    for (const char* key : {"value", "std", "rel_std_pct", "essential"}) EXPECT_TRUE(parameters[name].contains(key));
+  }
+  // Both flights fly the same truth: each recovers it.
+  for (const char* flight : {"B.flight1.ms_x", "B.flight2.ms_x"})
+    EXPECT_NEAR(parameters[flight]["value"].get<double>(), truth["parameters"]["B.ms_x"].get<double>(),
+                3.0 * parameters[flight]["std"].get<double>())
+        << flight;
+
+  const auto v = RunRotorid({"validate", "--params", Path("per_flight.json"), "--vehicle", Path("B.yaml"), "--log",
+                             Path("val.csv"), "--json", Path("per_flight_validate.json"), "--quiet"});
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const nlohmann::json validate = LoadJson(Path("per_flight_validate.json"));
+  ASSERT_TRUE(validate["first_moments"].contains("B.held_out1.ms_x")) << validate.dump();
+  EXPECT_NEAR(validate["first_moments"]["B.held_out1.ms_x"].get<double>(),
+              parameters["B.flight2.ms_x"]["value"].get<double>(),
+              3.0 * parameters["B.flight2.ms_x"]["std"].get<double>());
+  EXPECT_LT(validate["relative_error_pct"]["Fz"].get<double>(), 5.0);
+
+  const auto e = RunRotorid({"export", "--params", Path("per_flight.json"), "--vehicle", Path("B.yaml"), "--format",
+                             "yaml", "--out", Path("per_flight.yaml"), "--quiet"});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(Slurp(Path("per_flight.yaml")).find("note: \"first moment: the mean of 2 per-flight"), std::string::npos)
+      << Slurp(Path("per_flight.yaml"));
+
+  const auto bad =
+      RunRotorid({"identify", "--vehicle", Path("B.yaml"), "--log", Path("train.csv"), "--first-moment", "per-log"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("per-flight"), std::string::npos) << bad.err;
+}
+
 TEST_F(CliTest, HelpWorksEverywhere) {
   for (const char* command : {"simulate", "identify", "validate", "refine", "delay", "ablate", "diagnose"}) {
     const auto r = RunRotorid({command, "--help"});

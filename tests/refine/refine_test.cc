@@ -68,7 +68,8 @@ TEST_P(IdimResidualBlockTest, PassesGradientChecker) {
   // A generic point: every scaled parameter off the TLS optimum and away from zero.
   Eigen::VectorXd chi = Eigen::VectorXd::LinSpaced(context.num_parameters, 0.9, 1.2);
   chi[0] = 1.0;
-  internal::IdimResidualBlock block(&flight, &cache, &context, &blocks, 0, 40, count, sqrt_weight);
+  internal::IdimResidualBlock block(&flight, &cache, &context, &blocks, linear.system.flight_body_columns[0], 40, count,
+                                    sqrt_weight);
   // Generic values of every registered effect: a few per cent of its range, coordinates differing.
   std::vector<Eigen::VectorXd> values;
   std::vector<double*> parameters = {chi.data()};
@@ -230,11 +231,11 @@ TEST_P(EffectRecoveryTest, RecoversEffectAndUnbiasesParameters) {
     }
   }
   // kt, I_xx, I_yy, I_zz of B against the truth.
-  const int c0 = IdimSystem::ConfigColumn(0);
+  const std::array<int, kNumBodyParameters>& body = linear.system.flight_body_columns[0];
   const std::vector<std::pair<int, double>> checks = {{0, sim.truth.rotor.kt},
-                                                      {c0 + 3, sim.truth.body.inertia(0, 0)},
-                                                      {c0 + 4, sim.truth.body.inertia(1, 1)},
-                                                      {c0 + 5, sim.truth.body.inertia(2, 2)}};
+                                                      {body[3], sim.truth.body.inertia(0, 0)},
+                                                      {body[4], sim.truth.body.inertia(1, 1)},
+                                                      {body[5], sim.truth.body.inertia(2, 2)}};
   for (const auto& [k, truth] : checks) {
     if (!linear.solution.essential[k]) continue;
     const double linear_error = std::abs(linear.solution.chi[k] / truth - 1);

@@ -115,7 +115,7 @@ TEST_F(WrenchSplitTest, WrenchSplitSidesDifferByTheEquationError) {
   const WrenchSplit split = ComputeWrenchSplit(flight, LinearValues(), Effects());
   ASSERT_EQ(split.t_s.size(), flight.num_rows_samples());
   const Eigen::MatrixXd w = BuildIdimMatrix(flight);
-  const Eigen::VectorXd rho = w * FlightChiT(flight.vehicle, LinearValues());
+  const Eigen::VectorXd rho = w * FlightChiT(flight, LinearValues());
   for (int r = 0; r < split.t_s.size(); r += 97)
     for (int c = 0; c < 6; ++c) EXPECT_NEAR(split.error(r, c), rho[6 * r + c], 1e-9 * (1.0 + std::abs(rho[6 * r + c])));
   // The rotor model makes no lateral force; the thrust is about m g.

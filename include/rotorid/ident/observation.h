@@ -71,10 +71,19 @@ struct ProcessedFlight {
   std::optional<Eigen::VectorXd> height_m;
   std::optional<Eigen::MatrixXd> rotor_height_m;  // of each rotor's hub (n x rotors)
   std::optional<Eigen::VectorXd> voltage_v;
+  // Which log the flight was cut from (the segments of one log share it; -1: a log of its own).
+  int log_index = -1;
+  // Per-flight first moments: the label of this flight's own first moment ("flight2" names
+  // "<config>.flight2.ms_x"); empty when the flights of its configuration share one.
+  std::string first_moment_label;
 
   int num_rows_samples() const { return static_cast<int>(row_samples.size()); }
   FlightInputs inputs() const;
 };
+
+// The name of body parameter k (kBodyParameterNames) of this flight: "<config>.<name>", and
+// "<config>.<label>.ms_x" for a first moment of its own.
+std::string BodyParameterName(const ProcessedFlight& flight, int k);
 
 // sqrt(filtfilt(Omega^2)) per column: the rotor signal that enters the rows.
 Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared);

@@ -16,6 +16,7 @@
 // The refinement minimises the same criterion with the same lambda and N, so that with every
 // effect off it returns this solution.
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,11 +24,15 @@
 #include <Eigen/Core>
 
 #include "rotorid/ident/observation.h"
+#include "rotorid/model/parameters.h"
 
 namespace rotorid {
 
 // W_t of one or several flights. Flights of the same vehicle name share that configuration's
 // chi; kt and kd are shared by all. Columns: [kt kd chi_config1 ... chi_configC | mass column].
+// A flight with a first-moment label (ProcessedFlight::first_moment_label, per-flight first moments)
+// has its own three first-moment columns: its configuration's block is then
+// [ms of its first label, ms of its second label, ..., the six inertia entries].
 struct IdimSystem {
   Eigen::MatrixXd w;
   std::vector<std::string> parameter_names;  // one per column but the last
@@ -39,6 +44,8 @@ struct IdimSystem {
   std::vector<double> flight_weight;
   std::vector<int> flight_config;              // configuration index per flight
   std::vector<std::string> flight_source;
+  // Per flight, the system column of each of its nine body parameters.
+  std::vector<std::array<int, kNumBodyParameters>> flight_body_columns;
   std::vector<Eigen::MatrixXd> group_noise_cov;  // per group, sum over its rows (columns as w)
 
   int num_parameters() const { return static_cast<int>(parameter_names.size()); }
@@ -46,13 +53,13 @@ struct IdimSystem {
   int num_groups() const { return 6 * num_flights(); }
   static int Component(int group) { return group % 6; }
   static int Flight(int group) { return group / 6; }
-  // Column of the first body parameter of configuration c.
-  static int ConfigColumn(int c) { return 2 + 9 * c; }
-  // Column of this system that column k of a flight's own rows (BuildIdimMatrix: kt, kd, the nine
-  // body parameters, the known column) goes to when the flight is of configuration c.
-  int SystemColumn(int c, int k) const;
-  // Writes a flight's own rows `wf` into w's columns for configuration c, from `first_row` on.
-  void PlaceFlightRows(int c, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const;
+  // Column of a named parameter, -1 when the system has none.
+  int Column(const std::string& name) const;
+  // Column of this system that column k of flight f's own rows (BuildIdimMatrix: kt, kd, the nine
+  // body parameters, the known column) goes to.
+  int SystemColumn(int f, int k) const;
+  // Writes flight f's own rows `wf` into w's columns, from `first_row` on.
+  void PlaceFlightRows(int f, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const;
 };
 
 IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights);

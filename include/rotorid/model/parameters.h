@@ -48,8 +48,4 @@ struct VehicleParameters {
 // inertia at O_d (I += m (|p|^2 1 - p p^T)).
 BodyParameters AddPointMass(const BodyParameters& body, double mass_kg, const Eigen::Vector3d& p_m);
 
-// "kt", "kd", then "<config>.<body name>" for each configuration in order: the names of a
-// multi-configuration parameter vector [kt kd chi_1 ... chi_c].
-std::vector<std::string> ParameterNames(const std::vector<std::string>& config_names);
-
 }  // namespace rotorid

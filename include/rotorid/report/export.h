@@ -27,6 +27,9 @@ struct IdentifiedModel {
   nlohmann::json effects = nlohmann::json::object();  // "<effect parameter>": {"value", "std"} (refined only)
   // Rotor speed at full command (rad/s), 0 when unknown: maxRotVelocity, SIH_T_MAX and SIH_Q_MAX.
   double max_rotor_speed_radps = 0.0;
+  // What the export had to decide (a report with per-flight first moments: their mean is exported);
+  // written into each format's header. Empty when nothing.
+  std::string note;
 
   double Value(const std::string& name) const;  // 0 for a parameter the report lacks
   // A scalar effect parameter (e.g. "motor_tau_s"), when the report has it.
@@ -34,7 +37,9 @@ struct IdentifiedModel {
 };
 
 // Reads `block` ("" = refined when present, else linear) of an identify or refine report. Throws
-// rotorid::Error naming `source` when the block, kt or the vehicle's configuration is missing.
+// rotorid::Error naming `source` when the block, kt or the vehicle's configuration is missing. A
+// report with per-flight first moments (`<config>.flight<k>.ms_x`) gives the configuration their
+// mean as `<config>.ms_x` (std: their spread over the flights), with a note.
 IdentifiedModel IdentifiedModelFromReport(const nlohmann::json& report, const std::string& source,
                                           const Vehicle& vehicle, const std::string& block = "");
 
