@@ -51,9 +51,7 @@ double BatteryDrive::CommandFor(double speed_radps, double voltage_v) const {
   return InverseMap(speed_radps) / VoltageFactor(voltage_v);
 }
 
-double BatteryDrive::Speed(double command, double voltage_v) const {
-  return map_(command * VoltageFactor(voltage_v));
-}
+double BatteryDrive::Speed(double command, double voltage_v) const { return map_(command * VoltageFactor(voltage_v)); }
 
 CommandToSpeed DefaultCommandToSpeed(double max_speed_radps) {
   return CommandToSpeed{Eigen::Vector3d(0.0, 1.25 * max_speed_radps, -0.25 * max_speed_radps)};

@@ -91,8 +91,8 @@ Pilot::Pilot(const PilotOptions& options, RandomStream* random) : options_(optio
   pitch_ = SinusoidSum(random, 12, 0.15, 2.5, 0, -0.5, attitude_scale * options.excitation * options.pitch_rms_rad);
   // Yaw shaped on its rate, vertical motion on its acceleration (so the altitude stays small).
   yaw_ = SinusoidSum(random, 10, 0.05, 1.0, 1, 0.0, attitude_scale * options.excitation * options.yaw_rate_rms_radps);
-  altitude_ = SinusoidSum(random, 12, 0.15, 2.5, 2, 0.5,
-                          vertical_scale * options.excitation * options.vertical_acc_rms_mps2);
+  altitude_ =
+      SinusoidSum(random, 12, 0.15, 2.5, 2, 0.5, vertical_scale * options.excitation * options.vertical_acc_rms_mps2);
 }
 
 Pilot::Signal Pilot::ProfileChannel(int channel, double t_s) const {

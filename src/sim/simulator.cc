@@ -20,7 +20,6 @@
 namespace rotorid {
 namespace {
 
-
 // Independent random streams drawn from the one seed.
 enum RandomStreamId : std::uint64_t { kPilotStream = 1, kControllerStream, kJitterStream, kImuStream, kMocapStream };
 
@@ -233,9 +232,9 @@ std::string SimulationOptions::Validate() const {
       circle_speed_mps * circle_speed_mps / circle_radius_m > 5.0)
     return "circle speed must be within [0, 10] m/s with speed^2 / radius <= 5 m/s^2 (got " +
            FormatNumber(circle_speed_mps) + " m/s on " + FormatNumber(circle_radius_m) + " m)";
-  if (battery.enabled && (bad(battery.full_v) || bad(battery.empty_v) || bad(battery.hover_sag_v) ||
-                          !(battery.empty_v > 0.0) || battery.full_v < battery.empty_v || battery.hover_sag_v < 0.0 ||
-                          battery.hover_sag_v >= 0.5 * battery.empty_v))
+  if (battery.enabled &&
+      (bad(battery.full_v) || bad(battery.empty_v) || bad(battery.hover_sag_v) || !(battery.empty_v > 0.0) ||
+       battery.full_v < battery.empty_v || battery.hover_sag_v < 0.0 || battery.hover_sag_v >= 0.5 * battery.empty_v))
     return "battery voltages must satisfy 0 < empty <= full and 0 <= hover sag < empty / 2";
   if (!battery.enabled && !effects.IsZero(ParseEffectKind("battery")))
     return "battery_exponent needs the simulated battery (--battery): without it the log holds rotor speeds";
@@ -342,8 +341,8 @@ internal::PilotOptions PilotFor(const SimulationOptions& options, const Vehicle&
   pilot.start_s = options.hover_lead_in_s;
   pilot.hover_altitude_m = StartAltitude(options, vehicle);
   pilot.profile = options.profile;
-  const double yaw_authority_radps2 = 0.3 * model.kd * vehicle.num_rotors() * hover_speed_radps * hover_speed_radps /
-                                      model.inertia_diagonal.z();
+  const double yaw_authority_radps2 =
+      0.3 * model.kd * vehicle.num_rotors() * hover_speed_radps * hover_speed_radps / model.inertia_diagonal.z();
   pilot.spin_rate_radps = std::min(2.0 * kPi, 0.5 * yaw_authority_radps2 * pilot.spin_period_s / (2.0 * kPi));
   pilot.circle_radius_m = options.circle_radius_m;
   pilot.circle_speed_mps = options.circle_speed_mps;
@@ -368,6 +367,23 @@ struct BatteryRecord {
   std::vector<Eigen::VectorXd> command;
   std::vector<double> voltage_v;
 };
+
+// The battery of this flight (none when off), with the first sample recorded: the commands that
+// give the hover speeds at the starting voltage, so that the flight starts trimmed.
+std::optional<internal::BatteryDrive> MakeBatteryDrive(const SimulationOptions& options, const Vehicle& flown,
+                                                       const Eigen::VectorXd& hover, const std::vector<double>& times,
+                                                       BatteryRecord* record) {
+  if (!options.battery.enabled) return std::nullopt;
+  const internal::BatteryDrive battery(options.battery, *flown.command_to_speed, *flown.command_to_speed_voltage_v,
+                                       options.effects.Scalar(ParseEffectKind("battery")), hover.squaredNorm(),
+                                       times.front(), times.back());
+  const double voltage = battery.Voltage(times[0], hover.squaredNorm());
+  Eigen::VectorXd trimmed(hover.size());
+  for (Eigen::Index i = 0; i < hover.size(); ++i) trimmed[i] = battery.CommandFor(hover[i], voltage);
+  record->command.push_back(trimmed);
+  record->voltage_v.push_back(voltage);
+  return battery;
+}
 
 // The speeds the motors get for the speeds the controller wants, through the firmware's command
 // and the battery at this voltage; records both.
@@ -444,17 +460,8 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   state.position_w_m = Eigen::Vector3d(0.0, 0.0, StartAltitude(options, vehicle));
   state.rotor_speed_radps = hover;
   DelayedRotorSignal rotor_signal(command_latency_s);
-  std::optional<internal::BatteryDrive> battery;
   BatteryRecord battery_record;
-  if (options.battery.enabled) {
-    battery.emplace(options.battery, *flown.command_to_speed, *flown.command_to_speed_voltage_v,
-                    effects.Scalar(ParseEffectKind("battery")), hover.squaredNorm(), times.front(), times.back());
-    const double voltage = battery->Voltage(times[0], hover.squaredNorm());
-    Eigen::VectorXd trimmed(hover.size());
-    for (Eigen::Index i = 0; i < hover.size(); ++i) trimmed[i] = battery->CommandFor(hover[i], voltage);
-    battery_record.command.push_back(trimmed);
-    battery_record.voltage_v.push_back(voltage);
-  }
+  const std::optional<internal::BatteryDrive> battery = MakeBatteryDrive(options, flown, hover, times, &battery_record);
   rotor_signal.Append(times[0], hover);
   controller.Trim(hover, pilot.At(times[0]));
   const MultirotorDynamics::RotorCommand command = [&rotor_signal](double t_s) { return rotor_signal.At(t_s); };
@@ -524,10 +531,10 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     const internal::ControllerInput input{state.position_w_m, state.velocity_w_mps, state.attitude_wb, gyro};
     const Eigen::VectorXd wanted = controller.Update(t, dt_control, input, pilot.At(t + loop_latency_s));
     // The voltage of the next sample sags with this sample's load.
-    rotor_signal.Append(times[k + 1], battery ? DriveMotors(*battery, wanted,
-                                                            battery->Voltage(times[k + 1], acting.squaredNorm()),
-                                                            &battery_record)
-                                              : wanted);
+    rotor_signal.Append(
+        times[k + 1],
+        battery ? DriveMotors(*battery, wanted, battery->Voltage(times[k + 1], acting.squaredNorm()), &battery_record)
+                : wanted);
 
     state = IntegrateToNextSample(dynamics, command, times, k, command_latency_s, options.physics_rate_hz, state);
   }

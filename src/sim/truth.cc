@@ -24,17 +24,17 @@ Json NoiseJson(const NoiseLevels& noise) {
 Json OptionsJson(const SimulationResult& result) {
   const SimulationOptions& o = result.options;
   Json options{{"duration_s", o.duration_s},
-              {"samples", result.log.num_samples()},
-              {"log_rate_hz", o.log_rate_hz},
-              {"physics_rate_hz", o.physics_rate_hz},
-              {"integrator", "RK4"},
-              {"gravity_mps2", o.gravity_mps2},
-              {"mocap", o.mocap},
-              {"jitter_s", o.jitter_s},
-              {"excitation", o.excitation},
-              {"hover_altitude_m", o.hover_altitude_m},
-              {"hover_lead_in_s", o.hover_lead_in_s},
-              {"warmup_s", o.warmup_s}};
+               {"samples", result.log.num_samples()},
+               {"log_rate_hz", o.log_rate_hz},
+               {"physics_rate_hz", o.physics_rate_hz},
+               {"integrator", "RK4"},
+               {"gravity_mps2", o.gravity_mps2},
+               {"mocap", o.mocap},
+               {"jitter_s", o.jitter_s},
+               {"excitation", o.excitation},
+               {"hover_altitude_m", o.hover_altitude_m},
+               {"hover_lead_in_s", o.hover_lead_in_s},
+               {"warmup_s", o.warmup_s}};
   // Only when used, so that the paper-like flights' truth files keep their bytes.
   if (o.profile != FlightProfile::kPaper) options["profile"] = FlightProfileName(o.profile);
   if (o.profile == FlightProfile::kCircle) {
