@@ -362,6 +362,19 @@ Vehicle FlownVehicle(const Vehicle& vehicle, const SimulationOptions& options, c
   return flown;
 }
 
+// The most rotor speed the controller may ask for (0: its own 1.6 x hover). A vehicle with a command
+// map cannot turn faster than the full command gives; a map that cannot carry the hover with 10 % to
+// spare belongs to other parameters (derived ones): no ceiling then, and no battery, which needs it.
+double MixerCeiling(const Vehicle& flown, const Eigen::VectorXd& hover, const SimulationOptions& options) {
+  const double full_command_radps = flown.command_to_speed ? (*flown.command_to_speed)(1.0) : 0.0;
+  const bool map_carries_hover = full_command_radps >= 1.1 * hover.maxCoeff();
+  if (options.battery.enabled && !map_carries_hover)
+    throw Error("vehicle '" + flown.name + "': its command_to_speed map gives " + FormatNumber(full_command_radps) +
+                " rad/s at the full command, but hovering needs " + FormatNumber(hover.maxCoeff()) +
+                " rad/s (plus 10 %); the simulated battery cannot fly it (give kt in its simulation: mapping)");
+  return map_carries_hover ? full_command_radps : 0.0;
+}
+
 // The logged rotor commands and voltage of every sample (warm-up included) when the battery is simulated.
 struct BatteryRecord {
   std::vector<Eigen::VectorXd> command;
@@ -440,8 +453,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   const double loop_latency_s = command_latency_s + motor_time_constant_s + 1.0 / options.log_rate_hz;
   const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
   const Vehicle flown = FlownVehicle(vehicle, options, hover);
-  // A vehicle with a command map cannot turn faster than the full command gives.
-  const double max_speed_radps = flown.command_to_speed ? (*flown.command_to_speed)(1.0) : 0.0;
+  const double max_speed_radps = MixerCeiling(flown, hover, options);
   // The circle needs a position loop that tracks it (the feed-forward tilt alone drifts outwards).
   const double horizontal_omega_radps = options.profile == FlightProfile::kCircle ? 2.0 : 0.6;
   internal::FlightController controller(vehicle, model, g, loop_latency_s, motor_time_constant_s, max_speed_radps,

@@ -159,6 +159,18 @@ TEST(SimProfilesTest, BatterySagsAndTheLoggedCommandGivesTheMotorsSpeed) {
   SimulationOptions no_battery = TestOptions(2.0, 1.0);
   no_battery.effects.Set("battery_exponent", 1.0);
   EXPECT_NE(no_battery.Validate().find("--battery"), std::string::npos);
+
+  // A map that cannot carry the hover (the full command gives 1500 rad/s, hover needs 2063) is refused.
+  SimulationVehicle weak = PresetVehicle("CF");
+  weak.vehicle.command_to_speed = CommandToSpeed{Eigen::Vector3d(0.0, 1875.0, -375.0)};
+  SimulationOptions short_flight = TestOptions(1.0, 1.0);
+  short_flight.battery.enabled = true;
+  try {
+    Simulate(weak.vehicle, weak.parameters, short_flight);
+    FAIL() << "a battery flight beyond the map's reach was simulated";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot fly it"), std::string::npos) << e.what();
+  }
 }
 
 // Quick recovery on the Crazyflie-like preset: its realistic rotor inertia (5e-8 kg m^2) on the
