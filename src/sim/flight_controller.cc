@@ -12,9 +12,8 @@ namespace {
 
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 
-// Rotor speed bounds of the mixer, relative to the controller's hover speed.
+// Lower rotor speed bound of the mixer, relative to the controller's hover speed.
 constexpr double kMinSpeedRatio = 0.3;
-constexpr double kMaxSpeedRatio = 1.6;
 // Most tilt the horizontal position loop may add to the pilot's roll and pitch.
 constexpr double kMaxPositionCorrectionRad = 0.2;
 

@@ -19,6 +19,9 @@
 
 namespace rotorid::internal {
 
+// Upper rotor speed bound of the mixer, relative to the controller's hover speed.
+constexpr double kMaxSpeedRatio = 1.6;
+
 // x(t) = envelope-free sum_i a_i sin(w_i t + phi_i), with its first two time derivatives.
 class SinusoidSum {
  public:

@@ -354,10 +354,9 @@ constexpr double kDefaultMapVoltage = 3.8;
 Vehicle FlownVehicle(const Vehicle& vehicle, const SimulationOptions& options, const Eigen::VectorXd& hover_radps) {
   Vehicle flown = vehicle;
   if (!options.battery.enabled) return flown;
-  if (!flown.command_to_speed) {
-    constexpr double kMaxSpeedRatio = 1.6;  // as the controller's mixer
-    flown.command_to_speed = internal::DefaultCommandToSpeed(kMaxSpeedRatio * hover_radps.mean());
-  }
+  // Without a map: one whose full command gives the mixer's ceiling.
+  if (!flown.command_to_speed)
+    flown.command_to_speed = internal::DefaultCommandToSpeed(internal::kMaxSpeedRatio * hover_radps.mean());
   if (!flown.command_to_speed_voltage_v) flown.command_to_speed_voltage_v = kDefaultMapVoltage;
   return flown;
 }
