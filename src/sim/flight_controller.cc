@@ -110,11 +110,18 @@ Pilot::Signal Pilot::ProfileChannel(int channel, double t_s) const {
     }
     case FlightProfile::kCircle: {
       if (channel != kNorth && channel != kEast) break;
-      // Centre (0, R): starts at the origin heading along +x.
+      // Centre (0, R): starts at the origin heading along +x. Its angular speed, not its size, fades
+      // in (raised cosine over twice the references' ramp): the angle is w times the envelope's integral.
       const double r = options_.circle_radius_m, w = options_.circle_speed_mps / r;
-      const double c = std::cos(w * t), sn = std::sin(w * t);
-      s = channel == kNorth ? Signal{r * sn, r * w * c, -r * w * w * sn}
-                            : Signal{r * (1.0 - c), r * w * sn, r * w * w * c};
+      const double ramp = 2.0 * options_.ramp_s;
+      double e, de, dde;
+      Envelope(t, 0.0, ramp, &e, &de, &dde);
+      const double k = kTwoPi / (2.0 * ramp);
+      const double angle = w * (t < ramp ? 0.5 * (t - std::sin(k * t) / k) : t - 0.5 * ramp);
+      const double rate = w * e, acceleration = w * de;
+      const double c = std::cos(angle), sn = std::sin(angle);
+      s = channel == kNorth ? Signal{r * sn, r * rate * c, r * (acceleration * c - rate * rate * sn)}
+                            : Signal{r * (1.0 - c), r * rate * sn, r * (acceleration * sn + rate * rate * c)};
       break;
     }
     case FlightProfile::kTakeoffLanding: {
@@ -155,6 +162,12 @@ PilotReference Pilot::At(double t_s) const {
     ddx[c] = dde * v + 2.0 * de * dv + e * ddv;
     if (options_.profile == FlightProfile::kPaper) continue;
     const Signal p = ProfileChannel(c, t_s);
+    if (options_.profile == FlightProfile::kCircle) {  // faded in by its own speed
+      x[c] += p.value;
+      dx[c] += p.rate;
+      ddx[c] += p.acceleration;
+      continue;
+    }
     x[c] += e * p.value;
     dx[c] += de * p.value + e * p.rate;
     ddx[c] += dde * p.value + 2.0 * de * p.rate + e * p.acceleration;

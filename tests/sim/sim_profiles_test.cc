@@ -91,7 +91,7 @@ TEST(SimProfilesTest, CircleHoldsItsSpeedAndRadius) {
   double speed_sum = 0.0, worst_radius_error = 0.0;
   int count = 0;
   for (Eigen::Index k = 0; k < s.t_s.size(); ++k) {
-    if (s.t_s[k] < 4.0) continue;  // after the 1 s lead-in and the 2 s fade-in
+    if (s.t_s[k] < 5.0) continue;  // after the 1 s lead-in and the 4 s spin-up
     speed_sum += s.velocity_w_mps.row(k).head<2>().norm();
     const double radius = (s.position_w_m.row(k).head<2>().transpose() - Eigen::Vector2d(0.0, 1.0)).norm();
     worst_radius_error = std::max(worst_radius_error, std::abs(radius - 1.0));
