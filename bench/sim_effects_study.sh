@@ -8,13 +8,16 @@
 # scales 0.01, battery exponent 0.1, ground-effect coefficient 20 % (motor lag and delay, named in
 # pairs, 10 %). Results: docs/adding_an_effect.md, "Status of the other effects".
 #
-#   bench/sim_effects_study.sh [ROTORID=build/release/apps/rotorid] [SEEDS="1 2 3"] [OUT=/tmp/rotorid-sim-study] [VEHICLES="A CF"]
+#   bench/sim_effects_study.sh [ROTORID=build/release/apps/rotorid] [SEEDS="1 2 3"] [OUT=/tmp/rotorid-sim-study] [VEHICLES="A CF"] [MATCH=]
+#
+# MATCH (a grep -E pattern) keeps only the cases whose line matches it, e.g. "circle".
 set -uo pipefail
 cd "$(dirname "$0")/.."
 R=${1:-build/release/apps/rotorid}
 SEEDS=${2:-"1 2 3"}
 OUT=${3:-/tmp/rotorid-sim-study}
 VEHICLES=${4:-"A CF"}
+MATCH=${5:-}
 PY=/usr/bin/python3
 mkdir -p "$OUT"
 
@@ -82,6 +85,7 @@ PYEOF
 for c in "${CASES[@]}"; do
   IFS='|' read -r vehicle effects assigns simopts refineopts <<<"$c"
   case " $VEHICLES " in *" $vehicle "*) ;; *) continue ;; esac
+  [ -z "$MATCH" ] || grep -qE -- "$MATCH" <<<"$c" || continue
   seconds=60; [ "$vehicle" = CF ] && seconds=40
   for seed in $SEEDS; do
     base="$OUT/${vehicle}_${effects//,/+}_s$seed"
