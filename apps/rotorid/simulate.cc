@@ -24,7 +24,8 @@ struct SimulateArguments {
   std::string json_path;
   std::string preset = "A";
   std::string vehicle_path;
-  std::string noise = "pixhawk";
+  std::string noise;  // empty: the preset's (pixhawk for A, B and vehicle files)
+  std::string profile = "paper";
   std::vector<std::string> effects;
   std::string seed = "1";  // parsed here: CLI11 would wrap "-1" around to 2^64 - 1
   SimulationOptions options;
@@ -40,12 +41,15 @@ int RunSimulate(const CLI::App& app, const SimulateArguments& args) {
   if (args.seed.empty() || args.seed.size() > 19 || args.seed.find_first_not_of("0123456789") != std::string::npos)
     throw Error("--seed must be a non-negative integer below 10^19 (got '" + args.seed + "')");
   options.seed = std::stoull(args.seed);
-  options.noise = NoiseLevels::Preset(args.noise);
-  for (const std::string& effect : args.effects) options.effects.Assign(effect);
-  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   // An unknown preset is a usage error; a bad vehicle file is bad input.
   std::optional<SimulationVehicle> preset;
   if (args.vehicle_path.empty()) preset = PresetVehicle(args.preset);
+  // A preset logs at its own rate and noise unless told otherwise (CF: 500 Hz, bmi088).
+  if (preset && app.count("--rate") == 0) options.log_rate_hz = preset->log_rate_hz;
+  options.noise = NoiseLevels::Preset(!args.noise.empty() ? args.noise : preset ? preset->noise : "pixhawk");
+  options.profile = ParseFlightProfile(args.profile);
+  for (const std::string& effect : args.effects) options.effects.Assign(effect);
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   MarkOptionsValidated();
   const SimulationVehicle simulated = preset ? *preset : LoadSimulationVehicle(args.vehicle_path);
   SimulationResult result = Simulate(simulated.vehicle, simulated.parameters, options);
@@ -92,7 +96,9 @@ Command AddSimulateCommand(CLI::App& root) {
   app->add_option("--truth", args->truth_path, "ground-truth JSON to write (parameters, effects, noise, seed)");
   app->add_option("--vehicle-out", args->vehicle_out_path, "vehicle YAML to write (name, mass, rotors)");
   app->add_option("--json", args->json_path, "run summary JSON to write");
-  app->add_option("--preset", args->preset, "the paper's configuration: A or B (default A)");
+  app->add_option("--preset", args->preset,
+                  "A or B (the paper's configurations) or CF (Crazyflie-like: 34.7 g, X, arm 0.046 m, 500 Hz, bmi088 "
+                  "noise) (default A)");
   app->add_option("--vehicle", args->vehicle_path,
                   "vehicle YAML to fly instead of a preset; true parameters from its optional simulation: mapping "
                   "(kt, kd, ms: [3], inertia: [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]), else derived from mass and arm length");
@@ -103,8 +109,17 @@ Command AddSimulateCommand(CLI::App& root) {
   app->add_option("--effect", args->effects,
                   "unmodelled effect name=value, vectors name=x,y,z (repeatable): " + effect_names)
       ->allow_extra_args(false);
-  app->add_option("--noise", args->noise, "sensor noise preset: none, low or pixhawk (default pixhawk)");
-  app->add_option("--rate", args->options.log_rate_hz, "log (and controller) rate in Hz (default 200)");
+  app->add_option("--noise", args->noise,
+                  "sensor noise preset: none, low, pixhawk or bmi088 (default the preset's: pixhawk, CF: bmi088)");
+  app->add_option("--rate", args->options.log_rate_hz, "log (and controller) rate in Hz (default 200, CF: 500)");
+  app->add_option("--profile", args->profile,
+                  "what the pilot flies: paper (default), yaw-spin (large yaw-rate swings), circle (constant "
+                  "horizontal speed), takeoff-landing (low hover near the ground, climbs to 0.5 m and back)");
+  app->add_option("--circle-radius", args->options.circle_radius_m, "circle profile: radius in m (default 2)");
+  app->add_option("--circle-speed", args->options.circle_speed_mps, "circle profile: speed in m/s (default 2)");
+  app->add_flag("--battery", args->options.battery.enabled,
+                "simulate the battery: log the motor commands (rotor_signal: command) and a voltage column (4.2 -> "
+                "3.7 V over the flight, 0.3 V sag at hover thrust); the vehicle file gets the command_to_speed map");
   app->add_option("--physics-rate", args->options.physics_rate_hz, "RK4 integration rate in Hz (default 2000)");
   app->add_flag("--mocap", args->options.mocap, "also log motion capture: pos_x,pos_y,pos_z,roll,pitch,yaw");
   app->add_option("--jitter-s", args->options.jitter_s, "standard deviation of the sampling instants in s (default 0)");

@@ -56,9 +56,11 @@ const EffectDescriptor& BatteryEffect() {
     i.dimension = 1;
     i.lower_bound = 0.0;
     i.upper_bound = 3.0;
-    // rotorid's simulator logs rotor speeds, not commands with a voltage: it does not model it.
-    i.draw = {DrawShape::kUniform, 0.0, 0.0};
-    i.simulator_limit = {true, 0.0, 0.0};
+    // Realistic: 1 for a firmware without battery compensation (the motor sees duty x voltage),
+    // less with partial compensation, a little more where the speed grows faster than the voltage.
+    // The simulator flies it with its battery (SimulationOptions::battery: a command log with a voltage).
+    i.draw = {DrawShape::kUniform, 0.5, 1.5};
+    i.simulator_limit = {true, 0.0, 3.0};
     i.settle_tolerance = 1e-4;
     i.inputs = {FlightInput::kRotorCommand, FlightInput::kVoltage};
     return i;

@@ -12,9 +12,8 @@ namespace {
 
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 
-// Rotor speed bounds of the mixer, relative to the controller's hover speed.
+// Lower rotor speed bound of the mixer, relative to the controller's hover speed.
 constexpr double kMinSpeedRatio = 0.3;
-constexpr double kMaxSpeedRatio = 1.6;
 // Most tilt the horizontal position loop may add to the pilot's roll and pitch.
 constexpr double kMaxPositionCorrectionRad = 0.2;
 
@@ -79,13 +78,73 @@ void SinusoidSum::Evaluate(double t_s, double* value, double* rate, double* acce
 }
 
 Pilot::Pilot(const PilotOptions& options, RandomStream* random) : options_(options) {
+  // Near the ground the rotors must stay clear of it: small attitude references, no random climbs.
+  // On the circle, half the attitude references, so that the tilts they add (and the weak
+  // position loop) leave the vehicle near its circle.
+  const bool near_ground = options.profile == FlightProfile::kTakeoffLanding;
+  const double attitude_scale = near_ground ? 0.3 : options.profile == FlightProfile::kCircle ? 0.5 : 1.0;
+  const double vertical_scale = near_ground ? 0.0 : 1.0;
   // Attitude angles: energy spread over 0.15-2.5 Hz, slightly favouring low frequencies as a pilot
   // does; the high end still gives angular accelerations of several rad/s^2.
-  roll_ = SinusoidSum(random, 12, 0.15, 2.5, 0, -0.5, options.excitation * options.roll_rms_rad);
-  pitch_ = SinusoidSum(random, 12, 0.15, 2.5, 0, -0.5, options.excitation * options.pitch_rms_rad);
+  roll_ = SinusoidSum(random, 12, 0.15, 2.5, 0, -0.5, attitude_scale * options.excitation * options.roll_rms_rad);
+  pitch_ = SinusoidSum(random, 12, 0.15, 2.5, 0, -0.5, attitude_scale * options.excitation * options.pitch_rms_rad);
   // Yaw shaped on its rate, vertical motion on its acceleration (so the altitude stays small).
-  yaw_ = SinusoidSum(random, 10, 0.05, 1.0, 1, 0.0, options.excitation * options.yaw_rate_rms_radps);
-  altitude_ = SinusoidSum(random, 12, 0.15, 2.5, 2, 0.5, options.excitation * options.vertical_acc_rms_mps2);
+  yaw_ = SinusoidSum(random, 10, 0.05, 1.0, 1, 0.0, attitude_scale * options.excitation * options.yaw_rate_rms_radps);
+  altitude_ =
+      SinusoidSum(random, 12, 0.15, 2.5, 2, 0.5, vertical_scale * options.excitation * options.vertical_acc_rms_mps2);
+}
+
+Pilot::Signal Pilot::ProfileChannel(int channel, double t_s) const {
+  const double t = t_s - options_.start_s;  // the profile starts with the fade-in
+  Signal s;
+  if (t <= 0.0) return s;
+  switch (options_.profile) {
+    case FlightProfile::kPaper:
+      break;
+    case FlightProfile::kYawSpin: {
+      if (channel != kYaw) break;
+      // Yaw rate S sin(w t): yaw S / w (1 - cos(w t)).
+      const double w = kTwoPi / options_.spin_period_s, a = options_.spin_rate_radps;
+      s = {a / w * (1.0 - std::cos(w * t)), a * std::sin(w * t), a * w * std::cos(w * t)};
+      break;
+    }
+    case FlightProfile::kCircle: {
+      if (channel != kNorth && channel != kEast) break;
+      // Centre (0, R): starts at the origin heading along +x. Its angular speed, not its size, fades
+      // in (raised cosine over twice the references' ramp): the angle is w times the envelope's integral.
+      const double r = options_.circle_radius_m, w = options_.circle_speed_mps / r;
+      const double ramp = 2.0 * options_.ramp_s;
+      double e, de, dde;
+      Envelope(t, 0.0, ramp, &e, &de, &dde);
+      const double k = kTwoPi / (2.0 * ramp);
+      const double angle = w * (t < ramp ? 0.5 * (t - std::sin(k * t) / k) : t - 0.5 * ramp);
+      const double rate = w * e, acceleration = w * de;
+      const double c = std::cos(angle), sn = std::sin(angle);
+      s = channel == kNorth ? Signal{r * sn, r * rate * c, r * (acceleration * c - rate * rate * sn)}
+                            : Signal{r * (1.0 - c), r * rate * sn, r * (acceleration * sn + rate * rate * c)};
+      break;
+    }
+    case FlightProfile::kTakeoffLanding: {
+      if (channel != kAltitude) break;
+      // 12 s cycles: 3 s low hover, 3 s climb, 3 s high hover, 3 s descent (raised cosines).
+      constexpr double kPhaseS = 3.0;
+      const double climb = options_.high_altitude_m - options_.hover_altitude_m;
+      const double tau = std::fmod(t, 4.0 * kPhaseS);
+      const double w = kTwoPi / (2.0 * kPhaseS);
+      if (tau < kPhaseS) break;
+      if (tau >= 2.0 * kPhaseS && tau < 3.0 * kPhaseS) {
+        s.value = climb;
+        break;
+      }
+      // Climbing: (1 - cos) / 2 from 0 to 1; descending: its mirror.
+      const double sign = tau < 2.0 * kPhaseS ? 1.0 : -1.0;
+      const double phase = w * (tau - (sign > 0.0 ? kPhaseS : 3.0 * kPhaseS));
+      s = {climb * (sign > 0.0 ? 0.5 * (1.0 - std::cos(phase)) : 0.5 * (1.0 + std::cos(phase))),
+           sign * climb * 0.5 * w * std::sin(phase), sign * climb * 0.5 * w * w * std::cos(phase)};
+      break;
+    }
+  }
+  return s;
 }
 
 PilotReference Pilot::At(double t_s) const {
@@ -93,26 +152,41 @@ PilotReference Pilot::At(double t_s) const {
   Envelope(t_s, options_.start_s, options_.ramp_s, &e, &de, &dde);
   PilotReference reference;
   const SinusoidSum* channels[4] = {&roll_, &pitch_, &yaw_, &altitude_};
-  double x[4], dx[4], ddx[4];
-  for (int c = 0; c < 4; ++c) {
-    double v, dv, ddv;
-    channels[c]->Evaluate(t_s, &v, &dv, &ddv);
+  double x[kNumChannels], dx[kNumChannels], ddx[kNumChannels];
+  for (int c = 0; c < kNumChannels; ++c) {
+    double v = 0.0, dv = 0.0, ddv = 0.0;
+    if (c < 4) channels[c]->Evaluate(t_s, &v, &dv, &ddv);
     // (e v)' and (e v)'' with the fade-in envelope e.
     x[c] = e * v;
     dx[c] = de * v + e * dv;
     ddx[c] = dde * v + 2.0 * de * dv + e * ddv;
+    if (options_.profile == FlightProfile::kPaper) continue;
+    const Signal p = ProfileChannel(c, t_s);
+    if (options_.profile == FlightProfile::kCircle) {  // faded in by its own speed
+      x[c] += p.value;
+      dx[c] += p.rate;
+      ddx[c] += p.acceleration;
+      continue;
+    }
+    x[c] += e * p.value;
+    dx[c] += de * p.value + e * p.rate;
+    ddx[c] += dde * p.value + 2.0 * de * p.rate + e * p.acceleration;
   }
-  reference.bryant_rad << x[0], x[1], x[2];
-  reference.bryant_rate << dx[0], dx[1], dx[2];
-  reference.bryant_acceleration << ddx[0], ddx[1], ddx[2];
-  reference.altitude_m = options_.hover_altitude_m + x[3];
-  reference.climb_rate_mps = dx[3];
-  reference.vertical_acceleration_mps2 = ddx[3];
+  reference.bryant_rad << x[kRoll], x[kPitch], x[kYaw];
+  reference.bryant_rate << dx[kRoll], dx[kPitch], dx[kYaw];
+  reference.bryant_acceleration << ddx[kRoll], ddx[kPitch], ddx[kYaw];
+  reference.altitude_m = options_.hover_altitude_m + x[kAltitude];
+  reference.climb_rate_mps = dx[kAltitude];
+  reference.vertical_acceleration_mps2 = ddx[kAltitude];
+  reference.position_w_m << x[kNorth], x[kEast];
+  reference.velocity_w_mps << dx[kNorth], dx[kEast];
+  reference.acceleration_w_mps2 << ddx[kNorth], ddx[kEast];
   return reference;
 }
 
 FlightController::FlightController(const Vehicle& vehicle, const ControllerModel& model, double gravity_mps2,
-                                   double loop_latency_s, double motor_time_constant_s)
+                                   double loop_latency_s, double motor_time_constant_s, double max_speed_radps,
+                                   double horizontal_omega_radps)
     : model_(model), gravity_mps2_(gravity_mps2), loop_latency_s_(loop_latency_s) {
   const int n = vehicle.num_rotors();
   allocation_.resize(4, n);
@@ -133,7 +207,8 @@ FlightController::FlightController(const Vehicle& vehicle, const ControllerModel
 
   hover_speed_radps_ = std::sqrt(model.mass_kg * gravity_mps2 / (n * model.kt));
   min_speed_sq_ = std::pow(kMinSpeedRatio * hover_speed_radps_, 2);
-  max_speed_sq_ = std::pow(kMaxSpeedRatio * hover_speed_radps_, 2);
+  const double max_speed = kMaxSpeedRatio * hover_speed_radps_;
+  max_speed_sq_ = std::pow(max_speed_radps > 0.0 ? std::min(max_speed, max_speed_radps) : max_speed, 2);
 
   // The predictor treats the motor lag as part of the delay, which is only accurate for short
   // lags; slower motors get a softer attitude loop. Yaw is slower: the drag torque gives a quad
@@ -147,10 +222,9 @@ FlightController::FlightController(const Vehicle& vehicle, const ControllerModel
   altitude_kp_ = altitude_omega * altitude_omega;
   altitude_kd_ = 2.0 * 0.9 * altitude_omega;
   altitude_ki_ = 0.1 * altitude_omega * altitude_omega * altitude_omega;
-  // Weak: keeps the vehicle near the origin without fighting the pilot's attitude references.
-  const double horizontal_omega = 0.6;
-  horizontal_kp_ = horizontal_omega * horizontal_omega;
-  horizontal_kd_ = 2.0 * horizontal_omega;
+  // Weak by default: keeps the vehicle near the origin without fighting the pilot's attitude references.
+  horizontal_kp_ = horizontal_omega_radps * horizontal_omega_radps;
+  horizontal_kd_ = 2.0 * horizontal_omega_radps;
 }
 
 Eigen::VectorXd FlightController::Mix(double thrust_n, const Eigen::Vector3d& torque_nm) const {
@@ -200,17 +274,24 @@ Eigen::VectorXd FlightController::Update(double t_s, double dt_s, const Controll
 
   // Horizontal position loop: a small tilt added to the pilot's, in the heading frame, where
   // pitch accelerates along +x_heading (g * pitch) and roll along -y_heading (-g * roll).
+  // The reference's own horizontal acceleration (the circle) is fed forward as a tilt, unclamped.
   const Eigen::Vector2d horizontal_acc =
-      -horizontal_kp_ * input.position_w_m.head<2>() - horizontal_kd_ * input.velocity_w_mps.head<2>();
+      -horizontal_kp_ * (input.position_w_m.head<2>() - reference_ahead.position_w_m) -
+      horizontal_kd_ * (input.velocity_w_mps.head<2>() - reference_ahead.velocity_w_mps);
   const double yaw = std::atan2(r_wb(1, 0), r_wb(0, 0));
   const double c = std::cos(yaw), s = std::sin(yaw);
-  const Eigen::Vector2d heading_acc(c * horizontal_acc.x() + s * horizontal_acc.y(),
-                                    -s * horizontal_acc.x() + c * horizontal_acc.y());
+  const auto to_heading = [c, s](const Eigen::Vector2d& a) {
+    return Eigen::Vector2d(c * a.x() + s * a.y(), -s * a.x() + c * a.y());
+  };
+  const Eigen::Vector2d heading_acc = to_heading(horizontal_acc);
+  const Eigen::Vector2d heading_feedforward = to_heading(reference_ahead.acceleration_w_mps2);
   Eigen::Vector3d bryant_desired = reference_ahead.bryant_rad;
   bryant_desired.x() +=
-      std::clamp(-heading_acc.y() / gravity_mps2_, -kMaxPositionCorrectionRad, kMaxPositionCorrectionRad);
+      std::clamp(-heading_acc.y() / gravity_mps2_, -kMaxPositionCorrectionRad, kMaxPositionCorrectionRad) -
+      std::atan(heading_feedforward.y() / gravity_mps2_);
   bryant_desired.y() +=
-      std::clamp(heading_acc.x() / gravity_mps2_, -kMaxPositionCorrectionRad, kMaxPositionCorrectionRad);
+      std::clamp(heading_acc.x() / gravity_mps2_, -kMaxPositionCorrectionRad, kMaxPositionCorrectionRad) +
+      std::atan(heading_feedforward.x() / gravity_mps2_);
 
   // Attitude: PID on SO(3) (Lee et al. 2010) with the reference's angular acceleration fed forward.
   const Eigen::Matrix3d r_desired = BryantToRotation(bryant_desired);

@@ -15,8 +15,12 @@
 
 #include "rotorid/core/vehicle.h"
 #include "rotorid/sim/random.h"
+#include "rotorid/sim/simulator.h"
 
 namespace rotorid::internal {
+
+// Upper rotor speed bound of the mixer, relative to the controller's hover speed.
+constexpr double kMaxSpeedRatio = 1.6;
 
 // x(t) = envelope-free sum_i a_i sin(w_i t + phi_i), with its first two time derivatives.
 class SinusoidSum {
@@ -41,6 +45,10 @@ struct PilotReference {
   double altitude_m = 0.0;
   double climb_rate_mps = 0.0;
   double vertical_acceleration_mps2 = 0.0;
+  // Horizontal position of O_d (world x, y) with its derivatives: zero except for the circle.
+  Eigen::Vector2d position_w_m = Eigen::Vector2d::Zero();
+  Eigen::Vector2d velocity_w_mps = Eigen::Vector2d::Zero();
+  Eigen::Vector2d acceleration_w_mps2 = Eigen::Vector2d::Zero();
 };
 
 struct PilotOptions {
@@ -52,6 +60,12 @@ struct PilotOptions {
   double pitch_rms_rad = 0.075;        // about 4.3 deg RMS, peaks 12-15 deg
   double yaw_rate_rms_radps = 0.3;     // peaks 0.7-1 rad/s
   double vertical_acc_rms_mps2 = 1.1;  // thrust variations of +-20-30 %
+  // The profile's part, added to the references above (faded in with them).
+  FlightProfile profile = FlightProfile::kPaper;
+  double spin_rate_radps = 0.0;  // yaw-spin: peak of the yaw-rate swing S sin(2 pi t / spin_period_s)
+  double spin_period_s = 12.0;
+  double circle_radius_m = 0.0, circle_speed_mps = 0.0;
+  double high_altitude_m = 0.5;  // take-off / landing: hover_altitude_m (low) <-> this, 12 s cycles
 };
 
 class Pilot {
@@ -60,6 +74,13 @@ class Pilot {
   PilotReference At(double t_s) const;
 
  private:
+  enum Channel { kRoll, kPitch, kYaw, kAltitude, kNorth, kEast, kNumChannels };
+  struct Signal {
+    double value = 0.0, rate = 0.0, acceleration = 0.0;
+  };
+  // The profile's part of one channel (before the fade-in envelope).
+  Signal ProfileChannel(int channel, double t_s) const;
+
   PilotOptions options_;
   SinusoidSum roll_, pitch_, yaw_, altitude_;
 };
@@ -87,8 +108,11 @@ class FlightController {
   // delays and motor lags of tens of ms do not destabilise it; motor_time_constant_s softens the attitude
   // loop for slow motors. Throws rotorid::Error when the layout cannot produce independent
   // thrust, roll, pitch and yaw.
+  // max_speed_radps > 0 caps the mixer's rotor speeds below 1.6 x the hover speed (the motors' range);
+  // horizontal_omega_radps: the position loop's natural frequency (weak by default, stiffer to
+  // track a moving reference).
   FlightController(const Vehicle& vehicle, const ControllerModel& model, double gravity_mps2, double loop_latency_s,
-                   double motor_time_constant_s);
+                   double motor_time_constant_s, double max_speed_radps = 0.0, double horizontal_omega_radps = 0.6);
 
   // Presets the integrators so that, at rest on the reference, the output is these rotor speeds
   // (the vehicle took off and is trimmed when the simulation starts).

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iomanip>
 #include <locale>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -13,11 +14,11 @@
 #include "rotorid/model/rotation.h"
 #include "rotorid/sim/dynamics.h"
 #include "rotorid/sim/random.h"
+#include "sim/battery_drive.h"
 #include "sim/flight_controller.h"
 
 namespace rotorid {
 namespace {
-
 
 // Independent random streams drawn from the one seed.
 enum RandomStreamId : std::uint64_t { kPilotStream = 1, kControllerStream, kJitterStream, kImuStream, kMocapStream };
@@ -92,6 +93,10 @@ SimulationResult PrepareResult(const Vehicle& vehicle, const VehicleParameters& 
   log.acc_mps2.resize(num_logged, 3);
   log.rotor_radps.resize(num_logged, num_rotors);
   if (options.mocap) log.mocap = MocapTrack{Eigen::MatrixX3d(num_logged, 3), Eigen::MatrixX3d(num_logged, 3)};
+  if (options.battery.enabled) {
+    log.voltage_v = Eigen::VectorXd(num_logged);
+    log.metadata["rotor_signal"] = "command";  // the vehicle's command_to_speed maps it
+  }
   // No effect parameters here: the log must not tell the diagnosis what to find.
   log.metadata["gravity"] = FormatNumber(options.gravity_mps2);
   log.metadata["simulator"] = "rotorid simulate";
@@ -159,10 +164,39 @@ NoiseLevels NoiseLevels::Preset(const std::string& name) {
     noise.acc_std_mps2 = 0.15;
     noise.mocap_position_std_m = 0.5e-3;
     noise.mocap_angle_std_rad = 0.002;
+  } else if (name == "bmi088") {
+    // The broadband part (above ~55 Hz) of the IMRC Lab Crazyflies' logged gyro and accelerometer in
+    // flight, 500 Hz: gyro 0.005-0.030 rad/s, acc 0.03-0.14 m/s^2 per axis (jana01/04/06); the
+    // datasheet's densities times the firmware's bandwidths alone give 0.003 rad/s and 0.02 m/s^2.
+    noise.gyro_std_radps = 0.015;
+    noise.acc_std_mps2 = 0.06;
+    noise.mocap_position_std_m = 0.5e-3;
+    noise.mocap_angle_std_rad = 0.002;
   } else {
-    throw Error("unknown noise preset '" + name + "'; known presets: none, low, pixhawk");
+    throw Error("unknown noise preset '" + name + "'; known presets: none, low, pixhawk, bmi088");
   }
   return noise;
+}
+
+FlightProfile ParseFlightProfile(const std::string& name) {
+  for (FlightProfile profile :
+       {FlightProfile::kPaper, FlightProfile::kYawSpin, FlightProfile::kCircle, FlightProfile::kTakeoffLanding})
+    if (FlightProfileName(profile) == name) return profile;
+  throw Error("unknown flight profile '" + name + "'; known profiles: paper, yaw-spin, circle, takeoff-landing");
+}
+
+std::string FlightProfileName(FlightProfile profile) {
+  switch (profile) {
+    case FlightProfile::kPaper:
+      return "paper";
+    case FlightProfile::kYawSpin:
+      return "yaw-spin";
+    case FlightProfile::kCircle:
+      return "circle";
+    case FlightProfile::kTakeoffLanding:
+      return "takeoff-landing";
+  }
+  return "paper";
 }
 
 std::string SimulationOptions::Validate() const {
@@ -192,6 +226,18 @@ std::string SimulationOptions::Validate() const {
   if (bad(hover_altitude_m) || hover_altitude_m < 0.1 || hover_altitude_m > 1000.0)
     return "hover altitude must be within [0.1, 1000] m (got " + FormatNumber(hover_altitude_m) + ")";
   if (bad(warmup_s) || warmup_s < 0.0 || warmup_s > 60.0) return "warm-up must be within [0, 60] s";
+  if (bad(circle_radius_m) || circle_radius_m < 0.2 || circle_radius_m > 100.0)
+    return "circle radius must be within [0.2, 100] m (got " + FormatNumber(circle_radius_m) + ")";
+  if (bad(circle_speed_mps) || circle_speed_mps < 0.0 || circle_speed_mps > 10.0 ||
+      circle_speed_mps * circle_speed_mps / circle_radius_m > 5.0)
+    return "circle speed must be within [0, 10] m/s with speed^2 / radius <= 5 m/s^2 (got " +
+           FormatNumber(circle_speed_mps) + " m/s on " + FormatNumber(circle_radius_m) + " m)";
+  if (battery.enabled &&
+      (bad(battery.full_v) || bad(battery.empty_v) || bad(battery.hover_sag_v) || !(battery.empty_v > 0.0) ||
+       battery.full_v < battery.empty_v || battery.hover_sag_v < 0.0 || battery.hover_sag_v >= 0.5 * battery.empty_v))
+    return "battery voltages must satisfy 0 < empty <= full and 0 <= hover sag < empty / 2";
+  if (!battery.enabled && !effects.IsZero(ParseEffectKind("battery")))
+    return "battery_exponent needs the simulated battery (--battery): without it the log holds rotor speeds";
   if (bad(controller_error_min) || bad(controller_error_max) || controller_error_min < 0.0 ||
       controller_error_max < controller_error_min || controller_error_max > 0.3)
     return "controller errors must satisfy 0 <= min <= max <= 0.3";
@@ -278,6 +324,93 @@ SimState IntegrateToNextSample(const MultirotorDynamics& dynamics, const Multiro
   return state;
 }
 
+// Where the flight starts and the pilot hovers: the take-off profile starts in its low hover, a
+// rotor radius above the ground (at least 2 cm), where the ground effect is largest.
+double StartAltitude(const SimulationOptions& options, const Vehicle& vehicle) {
+  if (options.profile != FlightProfile::kTakeoffLanding) return options.hover_altitude_m;
+  return std::max(0.02, vehicle.rotor_radius_m.value_or(0.02));
+}
+
+// The pilot for this flight's profile. The yaw spin swings the yaw rate with a peak yaw
+// acceleration of half what 30 % of the hover's rotor speed squared gives about z (the vehicle's
+// yaw authority in the controller's model), at most one turn per second.
+internal::PilotOptions PilotFor(const SimulationOptions& options, const Vehicle& vehicle,
+                                const internal::ControllerModel& model, double hover_speed_radps) {
+  internal::PilotOptions pilot;
+  pilot.excitation = options.excitation;
+  pilot.start_s = options.hover_lead_in_s;
+  pilot.hover_altitude_m = StartAltitude(options, vehicle);
+  pilot.profile = options.profile;
+  const double yaw_authority_radps2 =
+      0.3 * model.kd * vehicle.num_rotors() * hover_speed_radps * hover_speed_radps / model.inertia_diagonal.z();
+  pilot.spin_rate_radps = std::min(2.0 * kPi, 0.5 * yaw_authority_radps2 * pilot.spin_period_s / (2.0 * kPi));
+  pilot.circle_radius_m = options.circle_radius_m;
+  pilot.circle_speed_mps = options.circle_speed_mps;
+  return pilot;
+}
+
+// The vehicle as flown: with the battery, a map (the default one when the vehicle has none) and its voltage.
+constexpr double kDefaultMapVoltage = 3.8;
+Vehicle FlownVehicle(const Vehicle& vehicle, const SimulationOptions& options, const Eigen::VectorXd& hover_radps) {
+  Vehicle flown = vehicle;
+  if (!options.battery.enabled) return flown;
+  // Without a map: one whose full command gives the mixer's ceiling.
+  if (!flown.command_to_speed)
+    flown.command_to_speed = internal::DefaultCommandToSpeed(internal::kMaxSpeedRatio * hover_radps.mean());
+  if (!flown.command_to_speed_voltage_v) flown.command_to_speed_voltage_v = kDefaultMapVoltage;
+  return flown;
+}
+
+// The most rotor speed the controller may ask for (0: its own 1.6 x hover). A vehicle with a command
+// map cannot turn faster than the full command gives; a map that cannot carry the hover with 10 % to
+// spare belongs to other parameters (derived ones): no ceiling then, and no battery, which needs it.
+double MixerCeiling(const Vehicle& flown, const Eigen::VectorXd& hover, const SimulationOptions& options) {
+  const double full_command_radps = flown.command_to_speed ? (*flown.command_to_speed)(1.0) : 0.0;
+  const bool map_carries_hover = full_command_radps >= 1.1 * hover.maxCoeff();
+  if (options.battery.enabled && !map_carries_hover)
+    throw Error("vehicle '" + flown.name + "': its command_to_speed map gives " + FormatNumber(full_command_radps) +
+                " rad/s at the full command, but hovering needs " + FormatNumber(hover.maxCoeff()) +
+                " rad/s (plus 10 %); the simulated battery cannot fly it (give kt in its simulation: mapping)");
+  return map_carries_hover ? full_command_radps : 0.0;
+}
+
+// The logged rotor commands and voltage of every sample (warm-up included) when the battery is simulated.
+struct BatteryRecord {
+  std::vector<Eigen::VectorXd> command;
+  std::vector<double> voltage_v;
+};
+
+// The battery of this flight (none when off), with the first sample recorded: the commands that
+// give the hover speeds at the starting voltage, so that the flight starts trimmed.
+std::optional<internal::BatteryDrive> MakeBatteryDrive(const SimulationOptions& options, const Vehicle& flown,
+                                                       const Eigen::VectorXd& hover, const std::vector<double>& times,
+                                                       BatteryRecord* record) {
+  if (!options.battery.enabled) return std::nullopt;
+  const internal::BatteryDrive battery(options.battery, *flown.command_to_speed, *flown.command_to_speed_voltage_v,
+                                       options.effects.Scalar(ParseEffectKind("battery")), hover.squaredNorm(),
+                                       times.front(), times.back());
+  const double voltage = battery.Voltage(times[0], hover.squaredNorm());
+  Eigen::VectorXd trimmed(hover.size());
+  for (Eigen::Index i = 0; i < hover.size(); ++i) trimmed[i] = battery.CommandFor(hover[i], voltage);
+  record->command.push_back(trimmed);
+  record->voltage_v.push_back(voltage);
+  return battery;
+}
+
+// The speeds the motors get for the speeds the controller wants, through the firmware's command
+// and the battery at this voltage; records both.
+Eigen::VectorXd DriveMotors(const internal::BatteryDrive& battery, const Eigen::VectorXd& wanted_radps,
+                            double voltage_v, BatteryRecord* record) {
+  Eigen::VectorXd command(wanted_radps.size()), speed(wanted_radps.size());
+  for (Eigen::Index i = 0; i < wanted_radps.size(); ++i) {
+    command[i] = battery.Command(wanted_radps[i]);
+    speed[i] = battery.Speed(command[i], voltage_v);
+  }
+  record->command.push_back(command);
+  record->voltage_v.push_back(voltage_v);
+  return speed;
+}
+
 }  // namespace
 
 SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
@@ -317,14 +450,16 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   for (int a = 0; a < 3; ++a)
     model.inertia_diagonal[a] = truth.body.inertia(a, a) * (1.0 + ControllerError(&controller_random, options));
   const double loop_latency_s = command_latency_s + motor_time_constant_s + 1.0 / options.log_rate_hz;
-  internal::FlightController controller(vehicle, model, g, loop_latency_s, motor_time_constant_s);
+  const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
+  const Vehicle flown = FlownVehicle(vehicle, options, hover);
+  const double max_speed_radps = MixerCeiling(flown, hover, options);
+  // The circle needs a position loop that tracks it (the feed-forward tilt alone drifts outwards).
+  const double horizontal_omega_radps = options.profile == FlightProfile::kCircle ? 2.0 : 0.6;
+  internal::FlightController controller(vehicle, model, g, loop_latency_s, motor_time_constant_s, max_speed_radps,
+                                        horizontal_omega_radps);
 
   RandomStream pilot_random(options.seed, kPilotStream);
-  internal::PilotOptions pilot_options;
-  pilot_options.excitation = options.excitation;
-  pilot_options.start_s = options.hover_lead_in_s;
-  pilot_options.hover_altitude_m = options.hover_altitude_m;
-  const internal::Pilot pilot(pilot_options, &pilot_random);
+  const internal::Pilot pilot(PilotFor(options, vehicle, model, controller.hover_speed_radps()), &pilot_random);
 
   const int num_warmup = static_cast<int>(std::lround(options.warmup_s * options.log_rate_hz));
   const int num_logged = static_cast<int>(std::lround(options.duration_s * options.log_rate_hz));
@@ -332,16 +467,17 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   const std::vector<double> times = SampleTimes(options, num_warmup, num_logged);
 
   // Start trimmed in hover at rest: rotors at the exact hover speeds, controller integrators preset.
-  const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
   SimState state;
-  state.position_w_m = Eigen::Vector3d(0.0, 0.0, options.hover_altitude_m);
+  state.position_w_m = Eigen::Vector3d(0.0, 0.0, StartAltitude(options, vehicle));
   state.rotor_speed_radps = hover;
   DelayedRotorSignal rotor_signal(command_latency_s);
+  BatteryRecord battery_record;
+  const std::optional<internal::BatteryDrive> battery = MakeBatteryDrive(options, flown, hover, times, &battery_record);
   rotor_signal.Append(times[0], hover);
   controller.Trim(hover, pilot.At(times[0]));
   const MultirotorDynamics::RotorCommand command = [&rotor_signal](double t_s) { return rotor_signal.At(t_s); };
 
-  SimulationResult result = PrepareResult(vehicle, truth, options, num_logged);
+  SimulationResult result = PrepareResult(flown, truth, options, num_logged);
   result.controller = {model.kt, model.kd, model.inertia_diagonal, controller.hover_speed_radps()};
   FlightLog& log = result.log;
   TrueStates& states = result.states;
@@ -377,7 +513,8 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
       log.t_s[row] = t;
       log.gyro_radps.row(row) = gyro;
       log.acc_mps2.row(row) = acc_noise;  // the signal is added after the flight
-      log.rotor_radps.row(row) = rotor_signal.Sample(k);
+      log.rotor_radps.row(row) = battery ? battery_record.command[k] : rotor_signal.Sample(k);
+      if (battery) (*log.voltage_v)[row] = battery_record.voltage_v[k];
       if (options.mocap) {
         log.mocap->position_w_m.row(row) =
             state.position_w_m + NoiseVector(&mocap_random, options.noise.mocap_position_std_m);
@@ -403,12 +540,18 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     // (one sample of latency), so the log interpolated between samples is exactly what the motors get.
     const double dt_control = k > 0 ? t - times[k - 1] : 1.0 / options.log_rate_hz;
     const internal::ControllerInput input{state.position_w_m, state.velocity_w_mps, state.attitude_wb, gyro};
-    rotor_signal.Append(times[k + 1], controller.Update(t, dt_control, input, pilot.At(t + loop_latency_s)));
+    const Eigen::VectorXd wanted = controller.Update(t, dt_control, input, pilot.At(t + loop_latency_s));
+    // The voltage of the next sample sags with this sample's load.
+    rotor_signal.Append(
+        times[k + 1],
+        battery ? DriveMotors(*battery, wanted, battery->Voltage(times[k + 1], acting.squaredNorm()), &battery_record)
+                : wanted);
 
     state = IntegrateToNextSample(dynamics, command, times, k, command_latency_s, options.physics_rate_hz, state);
   }
   AddDelayedAccelerometer(times, clean_accelerometer, num_warmup, accelerometer_delay_s, &log.acc_mps2);
   result.summary = Summarise(states);
+  if (battery) result.summary.voltage_range_v << log.voltage_v->minCoeff(), log.voltage_v->maxCoeff();
   return result;
 }
 
@@ -427,6 +570,9 @@ std::string SummaryLine(const SimulationResult& result) {
       << s.angular_acceleration_rms_radps2[2] << "] rad/s^2, thrust variation " << s.thrust_rms_variation_pct
       << " % RMS, rotor speed [" << std::setprecision(0) << s.rotor_speed_range_radps[0] << ", "
       << s.rotor_speed_range_radps[1] << "] rad/s";
+  if (result.options.profile != FlightProfile::kPaper) out << ", profile " << FlightProfileName(result.options.profile);
+  if (result.options.battery.enabled)
+    out << std::setprecision(2) << ", battery [" << s.voltage_range_v[0] << ", " << s.voltage_range_v[1] << "] V";
   return out.str();
 }
 

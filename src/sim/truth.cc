@@ -23,18 +23,31 @@ Json NoiseJson(const NoiseLevels& noise) {
 
 Json OptionsJson(const SimulationResult& result) {
   const SimulationOptions& o = result.options;
-  return Json{{"duration_s", o.duration_s},
-              {"samples", result.log.num_samples()},
-              {"log_rate_hz", o.log_rate_hz},
-              {"physics_rate_hz", o.physics_rate_hz},
-              {"integrator", "RK4"},
-              {"gravity_mps2", o.gravity_mps2},
-              {"mocap", o.mocap},
-              {"jitter_s", o.jitter_s},
-              {"excitation", o.excitation},
-              {"hover_altitude_m", o.hover_altitude_m},
-              {"hover_lead_in_s", o.hover_lead_in_s},
-              {"warmup_s", o.warmup_s}};
+  Json options{{"duration_s", o.duration_s},
+               {"samples", result.log.num_samples()},
+               {"log_rate_hz", o.log_rate_hz},
+               {"physics_rate_hz", o.physics_rate_hz},
+               {"integrator", "RK4"},
+               {"gravity_mps2", o.gravity_mps2},
+               {"mocap", o.mocap},
+               {"jitter_s", o.jitter_s},
+               {"excitation", o.excitation},
+               {"hover_altitude_m", o.hover_altitude_m},
+               {"hover_lead_in_s", o.hover_lead_in_s},
+               {"warmup_s", o.warmup_s}};
+  // Only when used, so that the paper-like flights' truth files keep their bytes.
+  if (o.profile != FlightProfile::kPaper) options["profile"] = FlightProfileName(o.profile);
+  if (o.profile == FlightProfile::kCircle) {
+    options["circle_radius_m"] = o.circle_radius_m;
+    options["circle_speed_mps"] = o.circle_speed_mps;
+  }
+  if (o.battery.enabled)
+    options["battery"] = Json{{"full_v", o.battery.full_v},
+                              {"empty_v", o.battery.empty_v},
+                              {"hover_sag_v", o.battery.hover_sag_v},
+                              {"reference_voltage_v", result.vehicle.command_to_speed_voltage_v.value_or(0.0)},
+                              {"command_to_speed", Vector(result.vehicle.command_to_speed->coefficients)}};
+  return options;
 }
 
 Json ControllerJson(const SimulationResult& result) {
@@ -169,6 +182,7 @@ std::string SimulationReportJson(const SimulationResult& result, const std::map<
                {"angular_acceleration_rms_radps2", Vector(s.angular_acceleration_rms_radps2)},
                {"thrust_rms_variation_pct", s.thrust_rms_variation_pct},
                {"rotor_speed_range_radps", Range(s.rotor_speed_range_radps)}};
+  if (result.options.battery.enabled) summary["voltage_range_v"] = Range(s.voltage_range_v);
   Json outputs_json = Json::object();
   for (const auto& [role, path] : outputs) outputs_json[role] = path;
   Json report;

@@ -114,6 +114,29 @@ TEST(SimCliTest, FliesAVehicleFileWithItsSimulationMapping) {
   std::filesystem::remove_all(dir);
 }
 
+// The Crazyflie-like preset logs at its own rate and noise; --battery writes a command log with a
+// voltage column and the vehicle file with its map, which `rotorid` reads back as a command log.
+TEST(SimCliTest, CrazyflieLikePresetWithItsBattery) {
+  const std::string dir = MakeTempDir("sim-cli");
+  const auto result = RunRotorid(
+      Args(dir, "cf", {"--preset", "CF", "--battery", "--effect", "battery_exponent=1", "--profile", "yaw-spin"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("at 500 Hz) of vehicle CF"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("noise bmi088"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("profile yaw-spin, battery ["), std::string::npos) << result.out;
+  const Vehicle vehicle = ReadVehicleYaml(dir + "/cf.yaml");
+  ASSERT_TRUE(vehicle.command_to_speed && vehicle.command_to_speed_voltage_v);
+  EXPECT_DOUBLE_EQ(*vehicle.command_to_speed_voltage_v, 3.8);
+  const FlightLog log = ReadFlightCsv(dir + "/cf.csv", vehicle.num_rotors());
+  ASSERT_TRUE(log.voltage_v.has_value());
+  EXPECT_EQ(log.metadata.at("rotor_signal"), "command");
+  EXPECT_LE(log.rotor_radps.maxCoeff(), 1.0);
+  const std::string truth = Slurp(dir + "/cf.json");
+  EXPECT_NE(truth.find("\"profile\": \"yaw-spin\""), std::string::npos);
+  EXPECT_NE(truth.find("\"hover_sag_v\": 0.3"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SimCliTest, BadOptionsGiveAOneLineErrorAndANonZeroExit) {
   const std::string dir = MakeTempDir("sim-cli");
   const std::string out = dir + "/x.csv";
@@ -129,6 +152,9 @@ TEST(SimCliTest, BadOptionsGiveAOneLineErrorAndANonZeroExit) {
       {"simulate", "--out", out, "--preset", "A", "--vehicle", dir + "/missing.yaml"},
       {"simulate", "--out", out, "--vehicle", dir + "/missing.yaml"},
       {"simulate", "--seconds", "2"},
+      {"simulate", "--out", out, "--profile", "loop"},
+      {"simulate", "--out", out, "--effect", "battery_exponent=1"},
+      {"simulate", "--out", out, "--profile", "circle", "--circle-radius", "1", "--circle-speed", "5"},
   };
   for (const auto& args : bad) {
     std::string joined;

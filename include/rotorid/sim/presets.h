@@ -22,11 +22,15 @@ struct SimulationVehicle {
   Vehicle vehicle;                // what the vehicle file says (name, mass, rotors)
   VehicleParameters parameters;   // the truth the simulator flies with
   std::string parameters_source;  // where `parameters` came from, for the truth JSON
+  // How such a vehicle logs (the CLI's defaults for --rate and --noise).
+  double log_rate_hz = 200.0;
+  std::string noise = "pixhawk";
 };
 
-// The paper's configuration "A" (plus quad, d = 0.225 m) or "B" (A with 0.125 kg at
-// (0.375, 0, -0.04) m and 0.042 kg at (0, -0.43, -0.04) m, added exactly). Throws rotorid::Error
-// for other names.
+// The paper's configuration "A" (plus quad, d = 0.225 m), "B" (A with 0.125 kg at
+// (0.375, 0, -0.04) m and 0.042 kg at (0, -0.43, -0.04) m, added exactly), or "CF", a Crazyflie 2.1
+// brushed-like quad (34.7 g, X layout, arm 0.046 m, kt 2e-8, 500 Hz, BMI088-like noise; its
+// sources in docs/simulator.md 5). Throws rotorid::Error for other names.
 SimulationVehicle PresetVehicle(const std::string& name);
 
 // Plausible parameters for any layout from its mass and mean arm length, scaled from the paper's

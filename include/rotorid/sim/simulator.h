@@ -30,9 +30,34 @@ struct NoiseLevels {
   double mocap_position_std_m = 0.5e-3;
   double mocap_angle_std_rad = 0.002;
 
-  // "none", "low" (a good IMU on a quiet frame) or "pixhawk" (a Pixhawk IMU in flight).
-  // Throws rotorid::Error for other names.
+  // "none", "low" (a good IMU on a quiet frame), "pixhawk" (a Pixhawk IMU in flight) or "bmi088"
+  // (a Crazyflie's BMI088 in flight, docs/simulator.md 3). Throws rotorid::Error for other names.
   static NoiseLevels Preset(const std::string& name);
+};
+
+// What the pilot flies (docs/simulator.md 4): the paper-like random references, or one of the
+// profiles that excite a particular effect of real vehicles on top of them.
+enum class FlightProfile {
+  kPaper,           // the paper-like flight (default)
+  kYawSpin,         // slow yaw-rate swings to the vehicle's yaw authority (rotor inertia, lever arm)
+  kCircle,          // a horizontal circle at constant speed (rotor drag)
+  kTakeoffLanding,  // cycles of low hover near the ground, climb, hover at 0.5 m, descent (ground effect)
+};
+// "paper", "yaw-spin", "circle", "takeoff-landing"; Parse throws rotorid::Error for other names.
+FlightProfile ParseFlightProfile(const std::string& name);
+std::string FlightProfileName(FlightProfile profile);
+
+// A one-cell battery feeding the motors, for command logs with a voltage (the `battery` effect):
+// V(t) = open circuit (full_v -> empty_v, linear over the flight) - hover_sag_v x thrust / hover thrust
+// (internal resistance times a current proportional to the thrust). With it, the logged rotor columns
+// are the commands u in [0, 1] that the firmware computes from the speed the controller wants through
+// the vehicle's command_to_speed map at its reference voltage (no battery compensation), and the
+// motors turn at map(u (V / V_ref)^beta), beta = battery_exponent (INTERFACE.md).
+struct BatteryOptions {
+  bool enabled = false;
+  double full_v = 4.2;
+  double empty_v = 3.7;
+  double hover_sag_v = 0.3;
 };
 
 struct SimulationOptions {
@@ -63,6 +88,12 @@ struct SimulationOptions {
   double hover_lead_in_s = 1.0;
   // Unlogged flight before t = 0 so that the controller has settled when the log starts.
   double warmup_s = 1.0;
+  // What the pilot flies; the circle's radius and speed.
+  FlightProfile profile = FlightProfile::kPaper;
+  double circle_radius_m = 2.0;
+  double circle_speed_mps = 2.0;
+  // The simulated battery (off: the log holds rotor speeds and no voltage).
+  BatteryOptions battery;
   // Relative error (5-10 % drawn per seed, random sign) of the controller's kt, kd and inertia.
   double controller_error_min = 0.05;
   double controller_error_max = 0.10;
@@ -98,6 +129,7 @@ struct FlightSummary {
   Eigen::Vector3d angular_acceleration_rms_radps2 = Eigen::Vector3d::Zero();
   double thrust_rms_variation_pct = 0.0;  // RMS of sum Omega^2 around its mean, in % of the mean
   Eigen::Vector2d rotor_speed_range_radps = Eigen::Vector2d::Zero();
+  Eigen::Vector2d voltage_range_v = Eigen::Vector2d::Zero();  // the logged voltage (battery only)
 };
 
 // The controller's own (deliberately wrong) model of the vehicle.
