@@ -43,25 +43,21 @@ print(f"{label:22s} selected={','.join(selected) or 'none':24s} {outcome}")
 PY
 }
 
+blind() {  # blind EFFECT PARAMETER RIVAL SIZE SEED: simulate, diagnose against a held-out flight, judge
+  local effect=$1 parameter=$2 rival=$3 size=$4 seed=$5
+  local name="${effect}_${size}_$seed"
+  sim "$name" "$seed" "$parameter=$size"
+  sim "${name}_val" $((seed + 100)) "$parameter=$size"
+  "$R" diagnose --vehicle "$OUT/$name.yaml" --log "$OUT/$name.csv" \
+    --validate-vehicle "$OUT/${name}_val.yaml" --validate-log "$OUT/${name}_val.csv" --json "$OUT/$name.json" -q || true
+  verdict "$effect $size s seed $seed" "$effect" "$rival" "$OUT/$name.json"
+}
+
 for size in 0.005 0.010 0.015; do
-  for seed in 1 2 3; do
-    sim "delay_${size}_$seed" "$seed" "delay_s=$size"
-    sim "delay_${size}_${seed}_val" $((seed + 100)) "delay_s=$size"
-    "$R" diagnose --vehicle "$OUT/delay_${size}_$seed.yaml" --log "$OUT/delay_${size}_$seed.csv" \
-      --validate-vehicle "$OUT/delay_${size}_${seed}_val.yaml" --validate-log "$OUT/delay_${size}_${seed}_val.csv" \
-      --json "$OUT/delay_${size}_$seed.json" -q || true
-    verdict "delay $size s seed $seed" delay motor_lag "$OUT/delay_${size}_$seed.json"
-  done
+  for seed in 1 2 3; do blind delay delay_s motor_lag "$size" "$seed"; done
 done
 for size in 0.010 0.020 0.040; do
-  for seed in 1 2 3; do
-    sim "lag_${size}_$seed" "$seed" "motor_tau_s=$size"
-    sim "lag_${size}_${seed}_val" $((seed + 100)) "motor_tau_s=$size"
-    "$R" diagnose --vehicle "$OUT/lag_${size}_$seed.yaml" --log "$OUT/lag_${size}_$seed.csv" \
-      --validate-vehicle "$OUT/lag_${size}_${seed}_val.yaml" --validate-log "$OUT/lag_${size}_${seed}_val.csv" \
-      --json "$OUT/lag_${size}_$seed.json" -q || true
-    verdict "motor_lag $size s seed $seed" motor_lag delay "$OUT/lag_${size}_$seed.json"
-  done
+  for seed in 1 2 3; do blind motor_lag motor_tau_s delay "$size" "$seed"; done
 done
 for seed in 1 2 3; do
   sim "both_$seed" "$seed" delay_s=0.015 motor_tau_s=0.030
