@@ -13,45 +13,24 @@ OUT=${3:-/tmp/rotorid-v2}
 PY=/usr/bin/python3
 mkdir -p "$OUT"
 
-# effect-name | --effect assignment | simulate options | tolerance per coordinate
+# effect-name | --effect assignment | simulate options
 CASES=(
-  "rotor_drag|rotor_drag=4e-5,6e-6||rel:0.10"
-  "rotor_inertia|rotor_inertia=3e-6||rel:0.15"
-  "rotor_inertia,motor_lag|rotor_inertia=3e-5 motor_tau_s=0.02||rel:0.15"
-  "rotor_thrust_scale|rotor_thrust_scale=0.03,-0.02,-0.03,0.02||abs:0.01"
-  "acc_delay|acc_delay=0.005||abs:0.001"
-  "ground_effect|ground_effect=1.0|--hover-altitude 0.3|rel:0.20"
-  "rotor_drag,rotor_inertia|rotor_drag=4e-5,6e-6 rotor_inertia=3e-6||rel:0.15"
-  "acc_delay,delay|acc_delay=0.005 delay=0.01||abs:0.001"
+  "rotor_drag|rotor_drag=4e-5,6e-6|"
+  "rotor_inertia|rotor_inertia=3e-6|"
+  "rotor_inertia,motor_lag|rotor_inertia=3e-5 motor_tau_s=0.02|"
+  "rotor_thrust_scale|rotor_thrust_scale=0.03,-0.02,-0.03,0.02|"
+  "acc_delay|acc_delay=0.005|"
+  "ground_effect|ground_effect=1.0|--hover-altitude 0.3"
+  "rotor_drag,rotor_inertia|rotor_drag=4e-5,6e-6 rotor_inertia=3e-6|"
+  "acc_delay,delay|acc_delay=0.005 delay=0.01|"
 )
 
-check() {  # check LABEL REPORT TRUTH TOLERANCE
-  "$PY" - "$@" <<'EOF'
-import json, sys
-label, report, truth_path, tol = sys.argv[1:5]
-kind, size = tol.split(":"); size = float(size)
-try:
-    r = json.load(open(report)); t = json.load(open(truth_path))
-except Exception as e:
-    print(f"{label:44s} no report ({e})"); sys.exit(0)
-eff = r["refined"]["effects"]; truth = t["effects"]
-ok = True; parts = []
-for key, entry in eff.items():
-    if not entry.get("enabled"): continue
-    v, s, want = entry["value"], entry["std"], truth.get(key)
-    vs = v if isinstance(v, list) else [v]; ss = s if isinstance(s, list) else [s]
-    ws = want if isinstance(want, list) else [want]
-    for a, (x, sd, w) in enumerate(zip(vs, ss, ws)):
-        limit = size * abs(w) if kind == "rel" else size
-        good = abs(x - w) <= limit
-        ok = ok and good
-        parts.append(f"{key}{'' if len(vs) == 1 else '_' + str(a + 1)} {w:.4g} -> {x:.4g} +- {sd if sd is None else float(sd):.2g}{'' if good else ' (!)'}")
-print(f"{label:44s} {'ok ' if ok else 'OUT'} " + "; ".join(parts))
-EOF
+check() {  # check LABEL REPORT TRUTH (issue 12's tolerances: bench/effect_check.py)
+  "$PY" bench/effect_check.py "$@"
 }
 
 for c in "${CASES[@]}"; do
-  IFS='|' read -r effects assigns simopts tol <<<"$c"
+  IFS='|' read -r effects assigns simopts <<<"$c"
   for seed in $SEEDS; do
     base="$OUT/${effects//,/+}_s$seed"
     args=()
@@ -60,17 +39,16 @@ for c in "${CASES[@]}"; do
     "$R" simulate -q --preset A --mocap --seconds 60 --seed "$seed" "${args[@]}" $simopts \
       --out "$base.csv" --truth "$base.truth.json" --vehicle-out "$base.yaml" || { echo "$base: simulate failed"; continue; }
     "$R" refine -q --vehicle "$base.yaml" --log "$base.csv" --effects "$effects" --json "$base.json" 2>"$base.err"
-    check "$effects seed $seed (exit $?)" "$base.json" "$base.truth.json" "$tol"
+    check "$effects seed $seed (exit $?)" "$base.json" "$base.truth.json"
   done
 done
 
 IND=../shared/data/independent-sim
 [ -d "$IND" ] || { echo "no $IND"; exit 0; }
-for pair in A_rotor_drag:rotor_drag:rel:0.10 A_rotor_inertia:rotor_inertia:rel:0.15 \
-            A_rotor_thrust_scale:rotor_thrust_scale:abs:0.01 A_ground_effect:ground_effect:rel:0.20 \
-            CF_acc_delay:acc_delay:abs:0.001 A_imu_lever_arm:imu_lever_arm:abs:0.002; do
-  IFS=':' read -r flight effect kind size <<<"$pair"
+for pair in A_rotor_drag:rotor_drag A_rotor_inertia:rotor_inertia A_rotor_thrust_scale:rotor_thrust_scale \
+            A_ground_effect:ground_effect CF_acc_delay:acc_delay A_imu_lever_arm:imu_lever_arm; do
+  IFS=':' read -r flight effect <<<"$pair"
   "$R" refine -q --vehicle "$IND/$flight.yaml" --log "$IND/$flight.csv" --effects "$effect" \
     --json "$OUT/$flight.json" 2>"$OUT/$flight.err"
-  check "independent $flight (exit $?)" "$OUT/$flight.json" "$IND/${flight}_truth.json" "$kind:$size"
+  check "independent $flight (exit $?)" "$OUT/$flight.json" "$IND/${flight}_truth.json"
 done

@@ -51,35 +51,7 @@ CASES=(
 )
 
 check() {  # check LABEL REPORT TRUTH SECONDS
-  "$PY" - "$@" <<'PYEOF'
-import json, sys
-label, report, truth_path, seconds = sys.argv[1:5]
-# issue 12's tolerances: (kind, size); "arm": 2 mm or 3 std
-TOL = {"imu_position_m": ("arm", 0.002), "acc_delay_s": ("abs", 0.001), "rotor_drag_coefficient": ("rel", 0.10),
-       "flapping_moment_coefficient": ("rel", 0.10), "rotor_inertia_kgm2": ("rel", 0.15),
-       "rotor_thrust_scale": ("abs", 0.01), "battery_exponent": ("abs", 0.1), "ground_effect_coefficient": ("rel", 0.20),
-       "motor_tau_s": ("rel", 0.10), "delay_s": ("rel", 0.10)}
-try:
-    r = json.load(open(report)); t = json.load(open(truth_path))
-except Exception as e:
-    print(f"{label:58s} no report ({e})"); sys.exit(0)
-eff = r["refined"]["effects"]; truth = t["effects"]
-ok = True; parts = []
-for key, entry in eff.items():
-    if not entry.get("enabled"): continue
-    v, s, want = entry["value"], entry["std"], truth.get(key)
-    vs = v if isinstance(v, list) else [v]; ss = s if isinstance(s, list) else [s]
-    ws = want if isinstance(want, list) else [want]
-    kind, size = TOL.get(key, ("rel", 0.10))
-    for a, (x, sd, w) in enumerate(zip(vs, ss, ws)):
-        sd = float(sd) if sd is not None else float("nan")
-        err = abs(x - w)
-        good = err <= (size * abs(w) if kind == "rel" else size) or (kind == "arm" and err <= 3 * sd)
-        ok = ok and good
-        parts.append(f"{key}{'' if len(vs) == 1 else '_' + str(a + 1)} {w:.4g} -> {x:.4g} +- {sd:.2g}{'' if good else ' (!)'}")
-kt = r["refined"]["parameters"]["kt"]["value"]; kt_true = t["parameters"]["kt"]
-print(f"{label:58s} {'ok ' if ok else 'OUT'} " + "; ".join(parts) + f"; kt {100 * (kt / kt_true - 1):+.2f} %; {seconds} s")
-PYEOF
+  "$PY" bench/effect_check.py "$@"
 }
 
 for c in "${CASES[@]}"; do
