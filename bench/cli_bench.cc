@@ -15,10 +15,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -50,7 +50,8 @@ Measurement Run(const std::vector<std::string>& args) {
   wait4(pid, &status, 0, &usage);
   Measurement m;
   m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  m.cpu_seconds = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  m.cpu_seconds =
+      usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   m.peak_mb = usage.ru_maxrss / 1024.0;
   m.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return m;
@@ -59,7 +60,8 @@ Measurement Run(const std::vector<std::string>& args) {
 // Each figure's own median (wall, CPU and memory need not come from the same run).
 Measurement Median(std::vector<Measurement> all) {
   auto median = [&all](double Measurement::*field) {
-    std::sort(all.begin(), all.end(), [field](const Measurement& a, const Measurement& b) { return a.*field < b.*field; });
+    std::sort(all.begin(), all.end(),
+              [field](const Measurement& a, const Measurement& b) { return a.*field < b.*field; });
     return all[all.size() / 2].*field;
   };
   Measurement m;
@@ -94,8 +96,8 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(dir);
   auto path = [&](const std::string& name) { return dir + "/" + name; };
   std::printf("preparing logs in %s ...\n", dir.c_str());
-  Run({rotorid, "simulate", "--preset", "B", "--seconds", "90", "--seed", "3", "--effect", "delay_s=0.015",
-       "--effect", "motor_tau_s=0.03", "--out", path("b90.csv"), "--vehicle-out", path("b.yaml"), "--quiet"});
+  Run({rotorid, "simulate", "--preset", "B", "--seconds", "90", "--seed", "3", "--effect", "delay_s=0.015", "--effect",
+       "motor_tau_s=0.03", "--out", path("b90.csv"), "--vehicle-out", path("b.yaml"), "--quiet"});
   Run({rotorid, "simulate", "--preset", "B", "--seconds", "30", "--seed", "4", "--out", path("b30.csv"), "--quiet"});
   if (long_log && !std::filesystem::exists(path("b3600.csv")))  // the same seed gives the same log
     Run({rotorid, "simulate", "--preset", "B", "--seconds", "3600", "--seed", "5", "--out", path("b3600.csv"),
@@ -107,7 +109,8 @@ int main(int argc, char** argv) {
   };
   std::vector<Case> cases = {{"identify, 90 s log", with({rotorid, "identify"}, flight), runs}};
   if (!identify_only) {
-    cases.push_back({"identify + HTML report, 90 s log", with({rotorid, "identify", "--report", path("report")}, flight), runs});
+    cases.push_back(
+        {"identify + HTML report, 90 s log", with({rotorid, "identify", "--report", path("report")}, flight), runs});
     cases.push_back({"refine, all effects, 90 s log", with({rotorid, "refine"}, flight), runs});
     cases.push_back({"delay, 90 s log", with({rotorid, "delay"}, flight), runs});
     cases.push_back({"ablate, 5 effects (32 subsets), 90 s log", with({rotorid, "ablate", "--threads", "2"}, flight),
@@ -115,9 +118,8 @@ int main(int argc, char** argv) {
     cases.push_back({"diagnose, 90 s log", with({rotorid, "diagnose"}, flight), runs});
   }
   if (long_log)
-    cases.push_back({"identify, 1 h log",
-                     {rotorid, "identify", "--vehicle", path("b.yaml"), "--log", path("b3600.csv")},
-                     runs});
+    cases.push_back(
+        {"identify, 1 h log", {rotorid, "identify", "--vehicle", path("b.yaml"), "--log", path("b3600.csv")}, runs});
   if (!baseline.empty()) {  // each rotorid case again with the baseline binary, run beside it
     std::vector<Case> paired;
     for (const Case& c : cases) {

@@ -1,6 +1,6 @@
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "rotorid/ident/observation.h"
 #include "rotorid/model/rigid_body.h"
@@ -71,8 +71,8 @@ TEST(NoiseCovarianceTest, EqualsTheSumOverRowsOfNumericJacobians) {
     const double scale = expected[c].cwiseAbs().maxCoeff();
     ASSERT_GT(scale, 0.0);
     EXPECT_LT((cov[c] - expected[c]).cwiseAbs().maxCoeff(), 1e-12 * scale) << kWrenchComponentNames[c] << "\n"
-                                                                            << cov[c] << "\n\n"
-                                                                            << expected[c];
+                                                                           << cov[c] << "\n\n"
+                                                                           << expected[c];
   }
 }
 
