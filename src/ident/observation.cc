@@ -1,5 +1,6 @@
 #include "rotorid/ident/observation.h"
 
+#include <array>
 #include <cmath>
 
 #include "rotorid/core/error.h"
@@ -255,27 +256,50 @@ Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight) {
   return w;
 }
 
+Eigen::Matrix<double, 6, kNumIdimColumns> IdimRowsSignalDerivative(const Eigen::Vector3d& w, double mass_kg, int k) {
+  constexpr int kMs = kNumRotorCoefficients, kInertia = kMs + 3, kMass = kNumIdimColumns - 1;
+  Eigen::Matrix<double, 6, kNumIdimColumns> d = Eigen::Matrix<double, 6, kNumIdimColumns>::Zero();
+  const Eigen::Vector3d e = Eigen::Vector3d::Unit(k % 3);
+  if (k < 3) {  // [w x]^2 ms and [w x] I w
+    const Eigen::Matrix3d w_skew = Skew<double>(w), e_skew = Skew<double>(e);
+    d.block<3, 3>(0, kMs) = e_skew * w_skew + w_skew * e_skew;
+    d.block<3, 6>(3, kInertia) = e_skew * InertiaProductMatrix<double>(w) + w_skew * InertiaProductMatrix<double>(e);
+  } else if (k < 6) {  // [w' x] ms and I w'
+    d.block<3, 3>(0, kMs) = Skew<double>(e);
+    d.block<3, 6>(3, kInertia) = InertiaProductMatrix<double>(e);
+  } else {  // m s and -[s x] ms
+    d.block<3, 1>(0, kMass) = mass_kg * e;
+    d.block<3, 3>(3, kMs) = -Skew<double>(e);
+  }
+  return d;
+}
+
 std::vector<Eigen::MatrixXd> IdimNoiseCovariance(const ProcessedFlight& flight) {
-  std::vector<Eigen::MatrixXd> cov(kNumWrenchComponents, Eigen::MatrixXd::Zero(kNumIdimColumns, kNumIdimColumns));
-  Eigen::Matrix<double, 9, 1> sigma;
-  sigma << flight.noise.angular_velocity, flight.noise.angular_acceleration, flight.noise.specific_force;
+  Eigen::Matrix<double, 9, 1> variance;
+  variance << flight.noise.angular_velocity, flight.noise.angular_acceleration, flight.noise.specific_force;
+  variance = variance.cwiseAbs2();
+  // Sum over rows of w w^T: the derivatives by w are linear in w, sum_m w_m dW/dx_k(e_m).
+  Eigen::Matrix3d w_moment = Eigen::Matrix3d::Zero();
   for (int i : flight.row_samples) {
-    Eigen::Matrix<double, 9, 1> x;
-    x << flight.angular_velocity.row(i).transpose(), flight.angular_acceleration.row(i).transpose(),
-        flight.specific_force.row(i).transpose();
-    const Eigen::VectorXd omega = flight.rotor.row(i).transpose();
-    for (int k = 0; k < 9; ++k) {
-      if (sigma[k] == 0.0) continue;
-      auto rows_at = [&](double delta) {
-        Eigen::Matrix<double, 9, 1> y = x;
-        y[k] += delta;
-        return IdimRows<double>(Eigen::Vector3d(y.segment<3>(0)), Eigen::Vector3d(y.segment<3>(3)),
-                                Eigen::Vector3d(y.segment<3>(6)), omega, flight.vehicle);
-      };
-      // Exact for the (at most quadratic) regressor.
-      const Eigen::Matrix<double, 6, kNumIdimColumns> jac = 0.5 * (rows_at(1.0) - rows_at(-1.0));
+    const Eigen::Vector3d w = flight.angular_velocity.row(i);
+    w_moment.noalias() += w * w.transpose();
+  }
+  const double rows = flight.num_rows_samples(), mass = flight.vehicle.mass_kg;
+  std::vector<Eigen::MatrixXd> cov(kNumWrenchComponents, Eigen::MatrixXd::Zero(kNumIdimColumns, kNumIdimColumns));
+  for (int k = 0; k < 9; ++k) {
+    if (variance[k] == 0.0) continue;
+    if (k >= 3) {
+      const Eigen::Matrix<double, 6, kNumIdimColumns> d = IdimRowsSignalDerivative(Eigen::Vector3d::Zero(), mass, k);
       for (int c = 0; c < kNumWrenchComponents; ++c)
-        cov[c].noalias() += sigma[k] * sigma[k] * jac.row(c).transpose() * jac.row(c);
+        cov[c].noalias() += (rows * variance[k]) * d.row(c).transpose() * d.row(c);
+      continue;
+    }
+    std::array<Eigen::Matrix<double, 6, kNumIdimColumns>, 3> by_w;
+    for (int m = 0; m < 3; ++m) by_w[m] = IdimRowsSignalDerivative(Eigen::Vector3d::Unit(m), mass, k);
+    for (int c = 0; c < kNumWrenchComponents; ++c) {
+      Eigen::Matrix<double, kNumIdimColumns, 3> a;
+      for (int m = 0; m < 3; ++m) a.col(m) = by_w[m].row(c).transpose();
+      cov[c].noalias() += variance[k] * a * w_moment * a.transpose();
     }
   }
   return cov;

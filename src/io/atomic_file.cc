@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 
 #include "rotorid/core/error.h"
 
@@ -68,10 +67,15 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open: " + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
+  // Read into one allocation of the file's size where it is known: a string stream held a long log
+  // (100 MB for 1 h at 200 Hz) up to three times over.
+  std::string content;
+  struct stat info {};
+  if (::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode)) content.reserve(static_cast<size_t>(info.st_size));
+  char chunk[1 << 16];
+  while (in.read(chunk, sizeof chunk) || in.gcount() > 0) content.append(chunk, static_cast<size_t>(in.gcount()));
   if (in.bad()) throw Error(path + ": read failed");
-  return buffer.str();
+  return content;
 }
 
 }  // namespace rotorid

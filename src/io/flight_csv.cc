@@ -2,6 +2,7 @@
 
 #include <fast_float/fast_float.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -103,25 +104,29 @@ void ReadHeader(const internal::TextLine& line, FlightTable* table) {
   table->data.resize(names.size());
 }
 
-// Only the columns rotorid reads must hold numbers.
+// Only the columns rotorid reads must hold numbers. The cells are taken off the line one by one
+// (no list of cells per row: a 1 h log has 720k rows).
 void ReadRow(const internal::TextLine& line, FlightTable* table) {
-  const auto cells = SplitCells(line.text);
-  if (cells.size() != table->names.size()) {
+  const size_t cells = static_cast<size_t>(std::count(line.text.begin(), line.text.end(), ',')) + 1;
+  if (cells != table->names.size()) {
     throw Error(Located(table->source, line.number, 0,
-                        "row has " + std::to_string(cells.size()) + " cells, the header has " +
+                        "row has " + std::to_string(cells) + " cells, the header has " +
                             std::to_string(table->names.size()) + " (truncated or malformed row)"));
   }
-  for (size_t k = 0; k < cells.size(); ++k) {
+  std::string_view rest = line.text;
+  for (size_t k = 0; k < cells; ++k) {
+    const size_t comma = rest.find(',');
+    const std::string_view cell = TrimSpaces(rest.substr(0, comma));
+    rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma + 1);
     if (!table->known[k]) continue;
-    const std::optional<double> value = internal::ParseNumber(cells[k]);
+    const std::optional<double> value = internal::ParseNumber(cell);
     if (!value) {
       throw Error(Located(table->source, line.number, CellColumn(line.text, k),
-                          "column '" + table->names[k] + "' is not a number: '" + std::string(cells[k]) + "'"));
+                          "column '" + table->names[k] + "' is not a number: '" + std::string(cell) + "'"));
     }
     if (!std::isfinite(*value)) {
-      throw Error(
-          Located(table->source, line.number, CellColumn(line.text, k),
-                  "column '" + table->names[k] + "' holds '" + std::string(cells[k]) + "', not a finite number"));
+      throw Error(Located(table->source, line.number, CellColumn(line.text, k),
+                          "column '" + table->names[k] + "' holds '" + std::string(cell) + "', not a finite number"));
     }
     table->data[k].push_back(*value);
   }
@@ -143,6 +148,11 @@ FlightTable ReadTable(const std::string& text, const std::string& source) {
       ReadCommentLine(trimmed, &table.metadata);
     } else if (!table.has_header) {
       ReadHeader(line, &table);
+      // At most one row per remaining line: no reallocation while the columns fill.
+      const size_t lines = static_cast<size_t>(std::count(rest.begin(), rest.end(), '\n')) + 1;
+      table.row_lines.reserve(lines);
+      for (size_t k = 0; k < table.data.size(); ++k)
+        if (table.known[k]) table.data[k].reserve(lines);
     } else {
       ReadRow(line, &table);
     }

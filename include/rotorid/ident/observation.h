@@ -11,6 +11,7 @@
 #include "rotorid/core/flight_log.h"
 #include "rotorid/core/vehicle.h"
 #include "rotorid/model/effects.h"
+#include "rotorid/model/rigid_body.h"
 #include "rotorid/signal/butterworth.h"
 
 namespace rotorid {
@@ -101,9 +102,15 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
 Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight);
 
 // Per wrench component (6), the sum over the flight's rows of the covariance of the errors of the
-// row entries (12x12, columns as BuildIdimMatrix) caused by the white noise of the signals. The
-// regressor is at most quadratic in the signals, so its Jacobian is taken exactly by central
-// differences.
+// row entries (12x12, columns as BuildIdimMatrix) caused by the white noise of the signals, to first
+// order: sum over rows and signals k of sigma_k^2 (dW/dx_k)^T (dW/dx_k) per component. The Jacobian
+// is IdimRowsSignalDerivative; it is linear in w and otherwise constant, so the sum over rows needs
+// only the number of rows and the second moments of w.
 std::vector<Eigen::MatrixXd> IdimNoiseCovariance(const ProcessedFlight& flight);
+
+// The derivative of IdimRows (6 x 12) with respect to signal k of x = [w; w'; s] (k = 0..8), in
+// closed form. The regressor is at most quadratic in the signals: the derivative with respect to w
+// is linear in w and those with respect to w' and s are constant; none depends on w', s or Omega.
+Eigen::Matrix<double, 6, kNumIdimColumns> IdimRowsSignalDerivative(const Eigen::Vector3d& w, double mass_kg, int k);
 
 }  // namespace rotorid
