@@ -79,7 +79,7 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
   }
   out.derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
   out.acceleration_derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
-  Eigen::MatrixXd speed;
+  Eigen::MatrixXd speed, half_inverse_speed;
   for (size_t first = 0; first == 0 || first < coordinates.size(); first += kRotorJetSize) {
     std::vector<Eigen::Matrix<RotorJet, Eigen::Dynamic, 1>> jets(chain.size());
     for (size_t j = 0; j < chain.size(); ++j) jets[j] = values[j].cast<RotorJet>();
@@ -97,14 +97,14 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
       speed = FilteredRotorSpeed(flight.filter, squared);
       at_rows(speed, &out.speed);
       at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration);
+      // d sqrt(z) = dz / (2 sqrt(z)): the same factor for every coordinate.
+      half_inverse_speed = (speed.array() > 0.0).select(0.5 * speed.cwiseInverse(), 0.0);
     }
     for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c) {
       Eigen::MatrixXd d_squared(n, rotors);
       for (Eigen::Index k = 0; k < n; ++k)
         for (Eigen::Index r = 0; r < rotors; ++r) d_squared(k, r) = (signal(k, r) * signal(k, r)).v[c - first];
-      // d sqrt(z) = dz / (2 sqrt(z)).
-      const Eigen::MatrixXd d_speed =
-          FiltFiltColumns(flight.filter, d_squared).cwiseProduct((speed.array() > 0.0).select(0.5 * speed.cwiseInverse(), 0.0));
+      const Eigen::MatrixXd d_speed = FiltFiltColumns(flight.filter, d_squared).cwiseProduct(half_inverse_speed);
       at_rows(d_speed, &out.derivative[c]);
       at_rows(FourthOrderCentralDifference(d_speed, flight.dt_s), &out.acceleration_derivative[c]);
     }

@@ -179,10 +179,13 @@ NoiseLevels NoiseLevels::Preset(const std::string& name) {
 }
 
 FlightProfile ParseFlightProfile(const std::string& name) {
+  std::string known;
   for (FlightProfile profile :
-       {FlightProfile::kPaper, FlightProfile::kYawSpin, FlightProfile::kCircle, FlightProfile::kTakeoffLanding})
+       {FlightProfile::kPaper, FlightProfile::kYawSpin, FlightProfile::kCircle, FlightProfile::kTakeoffLanding}) {
     if (FlightProfileName(profile) == name) return profile;
-  throw Error("unknown flight profile '" + name + "'; known profiles: paper, yaw-spin, circle, takeoff-landing");
+    known += (known.empty() ? "" : ", ") + FlightProfileName(profile);
+  }
+  throw Error("unknown flight profile '" + name + "'; known profiles: " + known);
 }
 
 std::string FlightProfileName(FlightProfile profile) {
