@@ -3,7 +3,8 @@
 tolerances: one line, truth -> estimate +- std per coordinate of every enabled effect, `ok` when
 all are within (lever arm 2 mm or 3 std, acc_delay 1 ms, drag coefficients 10 %, rotor inertia
 15 %, thrust scales 0.01, battery exponent 0.1, ground-effect coefficient 20 %, motor lag and delay
-10 %), then kt's error and, when given, the run time.
+10 %), then kt's error and, when given, the run time. bench/diagnosis_check.py judges a diagnosis
+with the same tolerances (`judge_effect`).
 
     effect_check.py LABEL REPORT TRUTH [SECONDS]
 """
@@ -15,34 +16,47 @@ TOL = {"imu_position_m": ("arm", 0.002), "acc_delay_s": ("abs", 0.001), "rotor_d
        "rotor_thrust_scale": ("abs", 0.01), "battery_exponent": ("abs", 0.1), "ground_effect_coefficient": ("rel", 0.20),
        "motor_tau_s": ("rel", 0.10), "delay_s": ("rel", 0.10)}
 
-label, report, truth_path = sys.argv[1:4]
-seconds = sys.argv[4] if len(sys.argv) > 4 else None
-try:
-    r = json.load(open(report))
-    t = json.load(open(truth_path))
-except Exception as e:
-    print(f"{label:58s} no report ({e})")
-    sys.exit(0)
-eff, truth = r["refined"]["effects"], t["effects"]
-ok, parts = True, []
-for key, entry in eff.items():
-    if not entry.get("enabled"):
-        continue
-    v, s, want = entry["value"], entry["std"], truth.get(key)
-    vs = v if isinstance(v, list) else [v]
-    ss = s if isinstance(s, list) else [s]
-    ws = want if isinstance(want, list) else [want]
+
+def as_list(x):
+    return x if isinstance(x, list) else [x]
+
+
+def judge_effect(key, value, std, want):
+    """(all coordinates within tolerance, text per coordinate) of one effect parameter."""
+    vs, ss, ws = as_list(value), as_list(std), as_list(want)
     kind, size = TOL.get(key, ("rel", 0.10))
+    ok, parts = True, []
     for a, (x, sd, w) in enumerate(zip(vs, ss, ws)):
         sd = float(sd) if sd is not None else float("nan")
         err = abs(x - w)
         good = err <= (size * abs(w) if kind == "rel" else size) or (kind == "arm" and err <= 3 * sd)
         ok = ok and good
         parts.append(f"{key}{'' if len(vs) == 1 else '_' + str(a + 1)} {w:.4g} -> {x:.4g} +- {sd:.2g}{'' if good else ' (!)'}")
-tail = ""
-kt_true = t.get("parameters", {}).get("kt")
-if kt_true:
-    tail += f"; kt {100 * (r['refined']['parameters']['kt']['value'] / kt_true - 1):+.2f} %"
-if seconds:
-    tail += f"; {seconds} s"
-print(f"{label:58s} {'ok ' if ok else 'OUT'} " + "; ".join(parts) + tail)
+    return ok, parts
+
+
+def main():
+    label, report, truth_path = sys.argv[1:4]
+    seconds = sys.argv[4] if len(sys.argv) > 4 else None
+    try:
+        r = json.load(open(report))
+        t = json.load(open(truth_path))
+    except Exception as e:
+        print(f"{label:58s} no report ({e})")
+        return
+    ok, parts = True, []
+    for key, entry in r["refined"]["effects"].items():
+        if entry.get("enabled"):
+            good, text = judge_effect(key, entry["value"], entry["std"], t["effects"].get(key))
+            ok, parts = ok and good, parts + text
+    tail = ""
+    kt_true = t.get("parameters", {}).get("kt")
+    if kt_true:
+        tail += f"; kt {100 * (r['refined']['parameters']['kt']['value'] / kt_true - 1):+.2f} %"
+    if seconds:
+        tail += f"; {seconds} s"
+    print(f"{label:58s} {'ok ' if ok else 'OUT'} " + "; ".join(parts) + tail)
+
+
+if __name__ == "__main__":
+    main()

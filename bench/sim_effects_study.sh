@@ -8,9 +8,12 @@
 # scales 0.01, battery exponent 0.1, ground-effect coefficient 20 % (motor lag and delay, named in
 # pairs, 10 %). Results: docs/adding_an_effect.md, "Status of the other effects".
 #
-#   bench/sim_effects_study.sh [ROTORID=build/release/apps/rotorid] [SEEDS="1 2 3"] [OUT=/tmp/rotorid-sim-study] [VEHICLES="A CF"] [MATCH=]
+#   bench/sim_effects_study.sh [ROTORID=build/release/apps/rotorid] [SEEDS="1 2 3"] [OUT=/tmp/rotorid-sim-study] [VEHICLES="A CF"] [MATCH=] [MODE=refine]
 #
 # MATCH (a grep -E pattern) keeps only the cases whose line matches it, e.g. "circle".
+# MODE=diagnose runs the blind diagnosis instead (`rotorid diagnose --effects $CANDIDATES`, every
+# registered effect by default) and judges it with bench/diagnosis_check.py: the withheld effect
+# ranked first, the withheld ones selected, nothing else; magnitudes with the same tolerances.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 R=${1:-build/release/apps/rotorid}
@@ -18,6 +21,8 @@ SEEDS=${2:-"1 2 3"}
 OUT=${3:-/tmp/rotorid-sim-study}
 VEHICLES=${4:-"A CF"}
 MATCH=${5:-}
+MODE=${6:-refine}
+CANDIDATES=${CANDIDATES:-every}
 PY=/usr/bin/python3
 mkdir -p "$OUT"
 
@@ -68,11 +73,22 @@ for c in "${CASES[@]}"; do
       --out "$base.csv" --truth "$base.truth.json" --vehicle-out "$base.yaml" 2>"$base.simerr" ||
       { echo "$vehicle $effects seed $seed: simulate failed: $(head -c 300 "$base.simerr")"; continue; }
     start=$(date +%s.%N)
-    # shellcheck disable=SC2086
-    "$R" refine -q --vehicle "$base.yaml" --log "$base.csv" --effects "$effects" --json "$base.json" $refineopts \
-      2>"$base.err"
+    if [ "$MODE" = diagnose ]; then
+      # shellcheck disable=SC2086
+      "$R" diagnose -q --vehicle "$base.yaml" --log "$base.csv" --effects "$CANDIDATES" --json "$base.diag.json" \
+        $refineopts 2>"$base.diag.err"
+    else
+      # shellcheck disable=SC2086
+      "$R" refine -q --vehicle "$base.yaml" --log "$base.csv" --effects "$effects" --json "$base.json" $refineopts \
+        2>"$base.err"
+    fi
     code=$?
     took=$(printf '%.1f' "$(echo "$(date +%s.%N) - $start" | bc)")
-    check "$vehicle ${effects} ${simopts%% --circle*} seed $seed (exit $code)" "$base.json" "$base.truth.json" "$took"
+    label="$vehicle ${effects} ${simopts%% --circle*} seed $seed (exit $code)"
+    if [ "$MODE" = diagnose ]; then
+      "$PY" bench/diagnosis_check.py "$label" "$base.diag.json" "$base.truth.json" "$took"
+    else
+      check "$label" "$base.json" "$base.truth.json" "$took"
+    fi
   done
 done
