@@ -77,6 +77,13 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
     if (flight.rotor_acceleration.rows() == n) at_rows(flight.rotor_acceleration, &out.acceleration);
     return out;
   }
+  if (coordinates.empty()) {  // values only: the chain in doubles, no Jet signal of every sample
+    const Eigen::MatrixXd speed = FilteredRotorSpeed(
+        flight.filter, TransformRotors<double>(flight, chain, acting.Parameters()).array().square().matrix());
+    at_rows(speed, &out.speed);
+    at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration);
+    return out;
+  }
   out.derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
   out.acceleration_derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
   Eigen::MatrixXd speed, half_inverse_speed;
