@@ -20,8 +20,8 @@ CheckedParameters ValuesOnly(const std::map<std::string, double>& values) {
 
 // The check's linearisation keeps at most this many row samples (an even stride): a first-order
 // screen needs the signatures' shapes, not every row, and the Jets of every row were most of
-// identify's time and, on long logs, its memory. On 26 simulated and 7 real flights the verdicts
-// stayed the same down to 1000 row samples, the shrinks within 2 percentage points
+// identify's time and, on long logs, its memory. On 19 simulated and 7 real logs the verdicts
+// stayed the same down to 1000 row samples, the shrinks within 1 percentage point
 // (docs/benchmarks.md).
 constexpr int kSignatureRowSamples = 2000;
 

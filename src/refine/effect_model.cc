@@ -105,7 +105,8 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
     for (size_t b = 0; b < blocks.size(); ++b) {
       std::vector<const RotorJet*> parameters;
       for (const auto& j : blocks[b]) parameters.push_back(j.data());
-      const Eigen::Matrix<RotorJet, Eigen::Dynamic, 1> signal = TransformRotor<RotorJet>(flight, chain, parameters, rotor);
+      const Eigen::Matrix<RotorJet, Eigen::Dynamic, 1> signal =
+          TransformRotor<RotorJet>(flight, chain, parameters, rotor);
       // The low-pass is linear: filter the value and each derivative of y^2 separately.
       if (b == 0) {
         Eigen::MatrixXd squared(n, 1);
