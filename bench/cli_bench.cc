@@ -112,6 +112,9 @@ int main(int argc, char** argv) {
     cases.push_back(
         {"identify + HTML report, 90 s log", with({rotorid, "identify", "--report", path("report")}, flight), runs});
     cases.push_back({"refine, all effects, 90 s log", with({rotorid, "refine"}, flight), runs});
+    cases.push_back({"refine, the five v1 effects, 90 s log",
+                     with({rotorid, "refine", "--effects", "delay,motor_lag,acc_bias,gyro_bias,misalignment"}, flight),
+                     runs});
     cases.push_back({"delay, 90 s log", with({rotorid, "delay"}, flight), runs});
     cases.push_back({"ablate, 5 effects (32 subsets), 90 s log", with({rotorid, "ablate", "--threads", "2"}, flight),
                      std::min(runs, 3)});

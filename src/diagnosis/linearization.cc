@@ -81,7 +81,7 @@ std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle) {
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
                                      const std::vector<std::string>& free_parameters, const Effects& effects,
-                                     const std::vector<EffectKind>& kinds) {
+                                     const std::vector<EffectKind>& kinds, int max_row_samples) {
   EffectLinearization out;
   out.kinds = kinds;
   for (size_t k = 0; k < kinds.size(); ++k)
@@ -89,8 +89,15 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
       out.labels.push_back(label);
       out.column_kind.push_back(static_cast<int>(k));
     }
-  Eigen::Index total_rows = 0;
-  for (const ProcessedFlight& f : flights) total_rows += kNumWrenchComponents * f.num_rows_samples();
+  Eigen::Index all_samples = 0;
+  for (const ProcessedFlight& f : flights) all_samples += f.num_rows_samples();
+  // An even stride over each flight's row samples; the kept ones, per flight, are ceil(n / stride).
+  const int stride = max_row_samples > 0 && all_samples > max_row_samples
+                         ? static_cast<int>((all_samples + max_row_samples - 1) / max_row_samples)
+                         : 1;
+  Eigen::Index kept_samples = 0;
+  for (const ProcessedFlight& f : flights) kept_samples += (f.num_rows_samples() + stride - 1) / stride;
+  const Eigen::Index total_rows = kNumWrenchComponents * kept_samples;
   const Eigen::Index p = static_cast<Eigen::Index>(free_parameters.size());
   const Eigen::Index e = static_cast<Eigen::Index>(out.labels.size());
   out.residual.resize(total_rows);
@@ -105,58 +112,66 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     if (kind->stage() == EffectStage::kRotorSignal) rotor_kinds.push_back(kind);
   for (const ProcessedFlight& flight : flights) {
     const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
-    const Eigen::MatrixXd w = BuildIdimMatrixWithEffects(flight, effects);
-    const Eigen::Index rows = w.rows();
-    const Eigen::VectorXd rho = w * chi_t;
+    const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, rotor_kinds);
+    // The rows' values as BuildIdimMatrixWithEffects gives them (no free coordinate), one row
+    // sample at a time: the residual of every row sample, without the flight's W.
+    const EffectRows values(&flight, effects, {}, &rotor);
+    const int samples = flight.num_rows_samples();
+    Eigen::MatrixXd rho(kNumWrenchComponents, samples);  // component x row sample
+    Eigen::MatrixXd rotor_wrench(kNumWrenchComponents, samples);
+    std::vector<int> column_of(static_cast<size_t>(p));
+    for (Eigen::Index c = 0; c < p; ++c) column_of[static_cast<size_t>(c)] = ColumnOf(free_parameters[c], flight);
+    const Eigen::Index kept = (samples + stride - 1) / stride;
+    for (int r = 0; r < samples; ++r) {
+      const Eigen::Matrix<double, 6, kNumIdimColumns> w = values.Rows<double>(r);
+      rho.col(r) = w * chi_t;
+      rotor_wrench.col(r) = w.leftCols<2>() * chi_t.head<2>();
+      if (r % stride != 0) continue;
+      for (Eigen::Index c = 0; c < p; ++c)
+        if (const int column = column_of[static_cast<size_t>(c)]; column >= 0)
+          out.parameter_jacobian.block<kNumWrenchComponents, 1>(offset + kNumWrenchComponents * (r / stride), c) =
+              w.col(column);
+    }
     // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
     Eigen::Matrix<double, kNumWrenchComponents, 1> scale;
     for (int j = 0; j < kNumWrenchComponents; ++j) {
-      double sum = 0.0, rotor = 0.0;
-      for (Eigen::Index i = j; i < rows; i += kNumWrenchComponents) {
-        sum += rho[i] * rho[i];
-        rotor += std::pow(w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1], 2);
+      double sum = 0.0, rotor_sum = 0.0;
+      for (int r = 0; r < samples; ++r) {
+        sum += rho(j, r) * rho(j, r);
+        rotor_sum += std::pow(rotor_wrench(j, r), 2);
       }
-      const double rms = std::sqrt(sum / std::max<Eigen::Index>(1, rows / kNumWrenchComponents));
+      const double rms = std::sqrt(sum / std::max(1, samples));
       scale[j] = rms > 0.0 ? rms : 1.0;
-      if (j >= 2 && rotor == 0.0) {
+      if (j >= 2 && rotor_sum == 0.0) {
         scale[j] = std::numeric_limits<double>::infinity();
       } else {
-        out.scored_rows += rows / kNumWrenchComponents;
+        out.scored_rows += samples;
+        component_series[j].push_back(rho.row(j).transpose() / scale[j]);
       }
     }
-    for (Eigen::Index i = 0; i < rows; ++i) {
-      const int j = static_cast<int>(i % kNumWrenchComponents);
-      out.row_component[offset + i] = j;
-      out.residual[offset + i] = rho[i] / scale[j];
-    }
-    for (Eigen::Index c = 0; c < p; ++c) {
-      const int column = ColumnOf(free_parameters[c], flight);
-      if (column < 0) continue;
-      for (Eigen::Index i = 0; i < rows; ++i)
-        out.parameter_jacobian(offset + i, c) = w(i, column) / scale[i % kNumWrenchComponents];
-    }
+    for (Eigen::Index k = 0; k < kept; ++k)
+      for (int j = 0; j < kNumWrenchComponents; ++j) {
+        const Eigen::Index i = offset + kNumWrenchComponents * k + j;
+        out.row_component[i] = j;
+        out.residual[i] = rho(j, stride * k) / scale[j];
+        out.parameter_jacobian.row(i) /= scale[j];
+      }
     // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows).
-    const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, rotor_kinds);
     const EffectRows model(&flight, effects, kinds, &rotor);
     const size_t coordinates = model.coordinates().size();
-    for (int r = 0; r < flight.num_rows_samples(); ++r)
+    for (Eigen::Index k = 0; k < kept; ++k)
       for (size_t first = 0; first < coordinates; first += kWideImuJetSize) {
-        const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows = model.Rows<WideImuJet>(r, first);
+        const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows =
+            model.Rows<WideImuJet>(static_cast<int>(stride * k), first);
         for (int j = 0; j < kNumWrenchComponents; ++j) {
           WideImuJet rho_jet(0.0);
-          for (int k = 0; k < kNumIdimColumns; ++k) rho_jet += jet_rows(j, k) * chi_t[k];
+          for (int c = 0; c < kNumIdimColumns; ++c) rho_jet += jet_rows(j, c) * chi_t[c];
           for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c)
-            out.effect_jacobian(offset + kNumWrenchComponents * r + j, static_cast<Eigen::Index>(c)) =
+            out.effect_jacobian(offset + kNumWrenchComponents * k + j, static_cast<Eigen::Index>(c)) =
                 rho_jet.v[c - first] / scale[j];
         }
       }
-    for (int j = 0; j < kNumWrenchComponents; ++j) {
-      if (std::isinf(scale[j])) continue;
-      Eigen::VectorXd series(rows / kNumWrenchComponents);
-      for (Eigen::Index r = 0; r < series.size(); ++r) series[r] = out.residual[offset + kNumWrenchComponents * r + j];
-      component_series[j].push_back(std::move(series));
-    }
-    offset += rows;
+    offset += kNumWrenchComponents * kept;
   }
   double factor = 0.0;
   int scored_components = 0;
@@ -168,9 +183,11 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   out.autocorrelation_factor = scored_components > 0 ? factor / scored_components : 1.0;
   Eigen::MatrixXd j(out.residual.size(), p + e);
   j << out.parameter_jacobian, out.effect_jacobian;
-  out.gram = j.transpose() * j;
-  out.gram_residual = j.transpose() * out.residual;
-  out.residual_ssr = out.residual.squaredNorm();
+  // The kept rows stand for all: sums over them scaled by all / kept row samples.
+  const double weight = static_cast<double>(all_samples) / static_cast<double>(std::max<Eigen::Index>(1, kept_samples));
+  out.gram = weight * (j.transpose() * j);
+  out.gram_residual = weight * (j.transpose() * out.residual);
+  out.residual_ssr = weight * out.residual.squaredNorm();
   return out;
 }
 

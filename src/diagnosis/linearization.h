@@ -60,11 +60,16 @@ struct EffectLinearization {
 
 // Linearises the model of `flights` at (parameters, effects): chi columns for `free_parameters`
 // (names as in NamedParameters), effect columns for `kinds` (derivatives by the rows' Jets, as in the
-// refinement: src/refine/effect_rows.h).
+// refinement: src/refine/effect_rows.h). With max_row_samples > 0 and more row samples than that,
+// the rows (residual, Jacobians, row_component) are those of every stride-th row sample of each
+// flight only, stride = ceil(all / max_row_samples), and the normal equations are scaled by all / kept
+// samples to stand for every row; the scales, scored_rows and the autocorrelation factor still come
+// from the residual of every row sample. The Jets cost about 13 times the rows' values, so this bounds
+// the cost and memory of a long log's linearisation.
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
                                      const std::vector<std::string>& free_parameters, const Effects& effects,
-                                     const std::vector<EffectKind>& kinds);
+                                     const std::vector<EffectKind>& kinds, int max_row_samples = 0);
 
 // Weighted least squares of the scaled residual on chi and the effect columns of `subset`.
 struct EffectSubsetFit {

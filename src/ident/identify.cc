@@ -163,27 +163,10 @@ FlightFit FitFlight(const ProcessedFlight& flight, const std::map<std::string, d
 
 std::vector<std::optional<double>> CombinedRelativeErrorPct(const std::vector<ProcessedFlight>& flights,
                                                             const std::map<std::string, double>& parameters) {
-  int rows = 0;
-  for (const ProcessedFlight& f : flights) rows += 6 * f.num_rows_samples();
-  // Each flight's rows are scaled so that sum over flights of ||rho||^2 and ||W_k chi_k||^2 add up.
-  Eigen::MatrixXd stacked(rows, kNumIdimColumns);
-  Eigen::VectorXd residual_rows(rows);
-  int row = 0;
-  for (const ProcessedFlight& f : flights) {
-    const Eigen::MatrixXd w = BuildIdimMatrix(f);
-    const Eigen::VectorXd chi_t = FlightChiT(f, parameters);
-    // Store rho in column 11 and the rotor wrench in column 0 with unit coefficients.
-    for (Eigen::Index i = 0; i < w.rows(); ++i) {
-      stacked.row(row + i).setZero();
-      stacked(row + i, 0) = w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1];
-      stacked(row + i, kNumIdimColumns - 1) = w.row(i).dot(chi_t) - stacked(row + i, 0);
-    }
-    row += static_cast<int>(w.rows());
-  }
-  Eigen::VectorXd unit = Eigen::VectorXd::Zero(kNumIdimColumns);
-  unit[0] = 1.0;
-  unit[kNumIdimColumns - 1] = 1.0;
-  return RelativeErrorPct(stacked, unit);
+  // Sums of ||rho||^2 and ||W_k chi_k||^2 over the flights, one flight's rows at a time.
+  RelativeErrorSums sums;
+  for (const ProcessedFlight& f : flights) sums.Add(BuildIdimMatrix(f), FlightChiT(f, parameters));
+  return sums.Pct();
 }
 
 namespace {

@@ -12,14 +12,12 @@
 namespace rotorid {
 namespace {
 
-// The rotor-signal chain on every rotor; parameters[j] are those of chain[j].
+// The rotor-signal chain on rotor `rotor`; parameters[j] are those of chain[j].
 template <typename T>
-Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> TransformRotors(const ProcessedFlight& flight,
-                                                                 const std::vector<EffectKind>& chain,
-                                                                 const std::vector<const T*>& parameters) {
-  const Eigen::Index n = flight.rotor_raw.rows(), rotors = flight.rotor_raw.cols();
-  Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> out(n, rotors);
-  Eigen::Matrix<T, Eigen::Dynamic, 1> signal, next;
+Eigen::Matrix<T, Eigen::Dynamic, 1> TransformRotor(const ProcessedFlight& flight, const std::vector<EffectKind>& chain,
+                                                   const std::vector<const T*>& parameters, Eigen::Index rotor) {
+  const Eigen::Index n = flight.rotor_raw.rows();
+  Eigen::Matrix<T, Eigen::Dynamic, 1> signal = flight.rotor_raw.col(rotor).cast<T>(), next;
   RotorSignalInput input;
   input.dt = flight.dt_s;
   Eigen::VectorXd command;
@@ -28,18 +26,21 @@ Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> TransformRotors(const Processed
     input.reference_voltage = flight.vehicle.command_to_speed_voltage_v.value_or(flight.voltage_v->mean());
   }
   if (flight.vehicle.command_to_speed) input.map = &*flight.vehicle.command_to_speed;
-  for (Eigen::Index r = 0; r < rotors; ++r) {
-    signal = flight.rotor_raw.col(r).cast<T>();
-    if (flight.rotor_command && flight.rotor_command->rows() == n) {
-      command = flight.rotor_command->col(r);
-      input.command = &command;
-    }
-    for (size_t j = 0; j < chain.size(); ++j) {
-      chain[j]->TransformRotorSignal(parameters[j], input, signal, &next);
-      signal.swap(next);
-    }
-    out.col(r) = signal;
+  if (flight.rotor_command && flight.rotor_command->rows() == n) {
+    command = flight.rotor_command->col(rotor);
+    input.command = &command;
   }
+  for (size_t j = 0; j < chain.size(); ++j) {
+    chain[j]->TransformRotorSignal(parameters[j], input, signal, &next);
+    signal.swap(next);
+  }
+  return signal;
+}
+
+Eigen::MatrixXd TransformRotors(const ProcessedFlight& flight, const std::vector<EffectKind>& chain,
+                                const std::vector<const double*>& parameters) {
+  Eigen::MatrixXd out(flight.rotor_raw.rows(), flight.rotor_raw.cols());
+  for (Eigen::Index r = 0; r < out.cols(); ++r) out.col(r) = TransformRotor<double>(flight, chain, parameters, r);
   return out;
 }
 
@@ -47,7 +48,7 @@ Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic> TransformRotors(const Processed
 
 Eigen::MatrixXd RotorSignalWithEffects(const ProcessedFlight& flight, const Effects& effects) {
   const EffectChain chain = ActingEffects(effects, EffectStage::kRotorSignal);
-  return TransformRotors<double>(flight, chain.kinds, chain.Parameters());
+  return TransformRotors(flight, chain.kinds, chain.Parameters());
 }
 
 EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects& effects,
@@ -77,36 +78,53 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
     if (flight.rotor_acceleration.rows() == n) at_rows(flight.rotor_acceleration, &out.acceleration);
     return out;
   }
+  if (coordinates.empty()) {  // values only: the chain in doubles, no Jet signal of every sample
+    const Eigen::MatrixXd speed = FilteredRotorSpeed(
+        flight.filter, TransformRotors(flight, chain, acting.Parameters()).array().square().matrix());
+    at_rows(speed, &out.speed);
+    at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration);
+    return out;
+  }
   out.derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
   out.acceleration_derivative.assign(coordinates.size(), Eigen::MatrixXd(rows, rotors));
-  Eigen::MatrixXd speed, half_inverse_speed;
-  for (size_t first = 0; first == 0 || first < coordinates.size(); first += kRotorJetSize) {
-    std::vector<Eigen::Matrix<RotorJet, Eigen::Dynamic, 1>> jets(chain.size());
+  // The chain's parameters as Jets, kRotorJetSize coordinates seeded per block.
+  std::vector<std::vector<Eigen::Matrix<RotorJet, Eigen::Dynamic, 1>>> blocks;
+  for (size_t first = 0; first < coordinates.size(); first += kRotorJetSize) {
+    std::vector<Eigen::Matrix<RotorJet, Eigen::Dynamic, 1>>& jets = blocks.emplace_back(chain.size());
     for (size_t j = 0; j < chain.size(); ++j) jets[j] = values[j].cast<RotorJet>();
     for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c)
       jets[coordinates[c].link][coordinates[c].index].v[c - first] = 1.0;
-    std::vector<const RotorJet*> parameters;
-    for (const auto& j : jets) parameters.push_back(j.data());
-    const Eigen::Matrix<RotorJet, Eigen::Dynamic, Eigen::Dynamic> signal =
-        TransformRotors<RotorJet>(flight, chain, parameters);
-    // The low-pass is linear: filter the value and each derivative of y^2 separately.
-    if (first == 0) {
-      Eigen::MatrixXd squared(n, rotors);
-      for (Eigen::Index k = 0; k < n; ++k)
-        for (Eigen::Index r = 0; r < rotors; ++r) squared(k, r) = (signal(k, r) * signal(k, r)).a;
-      speed = FilteredRotorSpeed(flight.filter, squared);
-      at_rows(speed, &out.speed);
-      at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration);
-      // d sqrt(z) = dz / (2 sqrt(z)): the same factor for every coordinate.
-      half_inverse_speed = (speed.array() > 0.0).select(0.5 * speed.cwiseInverse(), 0.0);
-    }
-    for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c) {
-      Eigen::MatrixXd d_squared(n, rotors);
-      for (Eigen::Index k = 0; k < n; ++k)
-        for (Eigen::Index r = 0; r < rotors; ++r) d_squared(k, r) = (signal(k, r) * signal(k, r)).v[c - first];
-      const Eigen::MatrixXd d_speed = FiltFiltColumns(flight.filter, d_squared).cwiseProduct(half_inverse_speed);
-      at_rows(d_speed, &out.derivative[c]);
-      at_rows(FourthOrderCentralDifference(d_speed, flight.dt_s), &out.acceleration_derivative[c]);
+  }
+  // One rotor at a time (the chain and the filters act on each alone): the Jet signal of every
+  // sample is one column, not the flight's rotors.
+  const auto column_at_rows = [&](const Eigen::MatrixXd& series, Eigen::MatrixXd* sampled, Eigen::Index rotor) {
+    for (int r = 0; r < rows; ++r) (*sampled)(r, rotor) = series(flight.row_samples[r], 0);
+  };
+  for (Eigen::Index rotor = 0; rotor < rotors; ++rotor) {
+    Eigen::MatrixXd half_inverse_speed;
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      std::vector<const RotorJet*> parameters;
+      for (const auto& j : blocks[b]) parameters.push_back(j.data());
+      const Eigen::Matrix<RotorJet, Eigen::Dynamic, 1> signal =
+          TransformRotor<RotorJet>(flight, chain, parameters, rotor);
+      // The low-pass is linear: filter the value and each derivative of y^2 separately.
+      if (b == 0) {
+        Eigen::MatrixXd squared(n, 1);
+        for (Eigen::Index k = 0; k < n; ++k) squared(k, 0) = (signal[k] * signal[k]).a;
+        const Eigen::MatrixXd speed = FilteredRotorSpeed(flight.filter, squared);
+        column_at_rows(speed, &out.speed, rotor);
+        column_at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration, rotor);
+        // d sqrt(z) = dz / (2 sqrt(z)): the same factor for every coordinate.
+        half_inverse_speed = (speed.array() > 0.0).select(0.5 * speed.cwiseInverse(), 0.0);
+      }
+      const size_t first = b * kRotorJetSize;
+      for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c) {
+        Eigen::MatrixXd d_squared(n, 1);
+        for (Eigen::Index k = 0; k < n; ++k) d_squared(k, 0) = (signal[k] * signal[k]).v[c - first];
+        const Eigen::MatrixXd d_speed = FiltFiltColumns(flight.filter, d_squared).cwiseProduct(half_inverse_speed);
+        column_at_rows(d_speed, &out.derivative[c], rotor);
+        column_at_rows(FourthOrderCentralDifference(d_speed, flight.dt_s), &out.acceleration_derivative[c], rotor);
+      }
     }
   }
   return out;

@@ -69,6 +69,41 @@ TEST(EffectLinearizationTest, FirstOrderStepRecoversAnAccBias) {
   }
 }
 
+// A linearisation on every third row sample stands for the whole: the same scale, row count and
+// autocorrelation factor (from every row's residual), the kept rows every third one, and the
+// normal equations scaled up, so that a fit's shrink and std are those of all rows to sampling error.
+TEST(EffectLinearizationTest, AStrideOfRowSamplesStandsForAllRows) {
+  const SimulationVehicle vehicle = PresetVehicle("B");
+  SimulationOptions options;
+  options.duration_s = 30.0;
+  options.seed = 32;
+  options.effects.Set("motor_tau_s", 0.03);
+  const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
+  const IdentificationResult linear = Identify({{sim.vehicle, sim.log, 1.0}}, IdentifyOptions{});
+  const std::vector<std::string> free = EssentialParameterNames(linear);
+  const std::vector<EffectKind> kinds = {ParseEffectKind("motor_lag"), ParseEffectKind("acc_bias")};
+  const auto chi = NamedParameters(linear.system, linear.solution.chi);
+  const EffectLinearization all = LinearizeEffects(linear.flights, chi, free, Effects{}, kinds);
+  const int samples = linear.flights.front().num_rows_samples();
+  const EffectLinearization thinned = LinearizeEffects(linear.flights, chi, free, Effects{}, kinds, (samples + 2) / 3);
+  ASSERT_EQ(thinned.residual.size(), 6 * ((samples + 2) / 3));
+  EXPECT_EQ(thinned.scored_rows, all.scored_rows);
+  EXPECT_EQ(thinned.autocorrelation_factor, all.autocorrelation_factor);
+  for (Eigen::Index k = 0; k < thinned.residual.size() / 6; ++k)
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_EQ(thinned.residual[6 * k + j], all.residual[6 * 3 * k + j]);
+      EXPECT_EQ(thinned.effect_jacobian(6 * k + j, 0), all.effect_jacobian(6 * 3 * k + j, 0));
+    }
+  EXPECT_NEAR(thinned.residual_ssr, all.residual_ssr, 0.02 * all.residual_ssr);
+  const EffectSubsetFit fit_all = FitEffectSubset(all, {kinds[0]});
+  const EffectSubsetFit fit_thinned = FitEffectSubset(thinned, {kinds[0]});
+  EXPECT_GT(fit_all.predicted_shrink, 0.3);
+  EXPECT_NEAR(fit_thinned.predicted_shrink, fit_all.predicted_shrink, 0.02);
+  EXPECT_NEAR(fit_thinned.step[0], fit_all.step[0], 0.02 * fit_all.step[0]);
+  EXPECT_NEAR(fit_thinned.std[0], fit_all.std[0], 0.05 * fit_all.std[0]);
+  EXPECT_EQ(fit_thinned.effective_samples, fit_all.effective_samples);
+}
+
 }  // namespace
 // A model whose yaw row shrinks as a whole (kd and I_zz scaled down together, as a linear fit does
 // when a delay spoils the yaw equation) has a smaller held-out Mz residual without fitting any
