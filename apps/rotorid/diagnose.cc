@@ -36,7 +36,9 @@ Command AddDiagnoseCommand(CLI::App& root) {
   std::string in_all;
   for (EffectKind kind : DefaultCandidates()) in_all += (in_all.empty() ? "" : ",") + kind->name();
   command.app
-      ->add_option("--effects", options->effects, "candidate effects: all (" + in_all + ") or a list of " + names)
+      ->add_option("--effects", options->effects,
+                   "candidate effects: all (" + in_all + "), every (all " + std::to_string(AllEffects().size()) +
+                       " registered effects) or a list of " + names)
       ->capture_default_str();
   command.app->add_option("--folds", d.folds, "time-blocked held-out folds per flight (without --validate-log)")
       ->capture_default_str();

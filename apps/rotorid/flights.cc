@@ -165,7 +165,7 @@ nlohmann::json FitHeldOutFirstMomentsJson(std::vector<ProcessedFlight>* flights,
 
 std::vector<EffectKind> EffectsForFlights(const std::string& list, const IdentificationResult& linear, bool quiet) {
   const std::vector<EffectKind> named = ParseEffectList(list);
-  if (list != "all") return named;
+  if (list != "all" && list != "every") return named;
   std::vector<EffectKind> kept;
   for (EffectKind kind : named) {
     std::string why;
@@ -174,7 +174,7 @@ std::vector<EffectKind> EffectsForFlights(const std::string& list, const Identif
     if (why.empty()) {
       kept.push_back(kind);
     } else if (!quiet) {
-      std::cerr << "rotorid: note: " << why << "; left out of \"all\"\n";
+      std::cerr << "rotorid: note: " << why << "; left out of \"" << list << "\"\n";
     }
   }
   return kept;

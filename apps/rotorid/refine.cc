@@ -73,7 +73,8 @@ Command AddRefineCommand(CLI::App& root) {
   AddFirstMomentOption(command.app, &options->identify);
   command.app
       ->add_option("--effects", options->effects,
-                   "effects to estimate: all, none, or a list of delay,motor_lag,acc_bias,gyro_bias,misalignment")
+                   "effects to estimate: all (the default candidates), every (all registered effects), none, or a list "
+                   "of effect names (rotorid diagnose --help lists them)")
       ->capture_default_str();
   command.app->add_option("--init", options->initial, "initial value of an effect parameter, e.g. delay_s=0.01");
   command.app->add_option("--robust-loss", options->refine.robust_loss, "none, huber or cauchy")->capture_default_str();

@@ -108,9 +108,9 @@ class HeldOutEvaluator : public internal::ModelFitter {
         RefineOptions refine;
         refine.effects = KindsOf(masks[m]);
         refine.initial = initial[m][k];
-        refine.coarse_delay_search = false;  // started from the diagnosis' own search
+        refine.coarse_delay_search = false;           // started from the diagnosis' own search
         refine.delay_search = options_.delay_search;  // which also bounds the delay
-        refine.compute_covariance = false;   // std come from the linearisation
+        refine.compute_covariance = false;            // std come from the linearisation
         refine.max_iterations = options_.refine_max_iterations;
         refine.num_threads = 1;  // parallel over models and folds instead
         refine.reselect_essential = options_.reselect_essential;
@@ -180,21 +180,22 @@ class HeldOutEvaluator : public internal::ModelFitter {
 // The verdict of a candidate whose inputs a log lacks (velocity, voltage, ...): unavailable for
 // these logs, with the reason. None when every flight can carry it.
 std::optional<EffectVerdict> UnavailableVerdict(EffectKind kind, const std::vector<ProcessedFlight>& flights) {
-  // Its folds and linearised steps keep every effect at a size known without the vehicle.
-  if (kind->FixedDimension() < 0)
-    throw Error("diagnose: " + kind->name() +
-                " has one value per rotor, which the diagnosis does not take yet; refine it by name (rotorid "
-                "refine --effects " +
-                kind->name() + ")");
   std::string reason;
   for (size_t f = 0; f < flights.size() && reason.empty(); ++f)
     if (const std::string why = kind->Unavailable(flights[f].inputs()); !why.empty())
       reason = flights[f].source + ": " + why + "; not a candidate";
+  // One value per rotor: the folds and the linearisation give every flight the same parameters.
+  const Vehicle& vehicle = flights.front().vehicle;
+  for (size_t f = 1; f < flights.size() && reason.empty(); ++f)
+    if (kind->Dimension(flights[f].vehicle) != kind->Dimension(vehicle))
+      reason = flights[f].source + ": " + kind->name() + " has one value per rotor, and this flight's vehicle has " +
+               std::to_string(flights[f].vehicle.num_rotors()) + " rotors, " + flights.front().source + "'s " +
+               std::to_string(vehicle.num_rotors()) + "; not a candidate";
   if (reason.empty()) return std::nullopt;
   EffectVerdict v;
   v.kind = kind;
   v.status = "unavailable";
-  v.value = Eigen::VectorXd::Zero(EffectDimension(kind));
+  v.value = Eigen::VectorXd::Zero(kind->Dimension(vehicle));
   v.note = reason;
   return v;
 }
@@ -265,6 +266,51 @@ RefineResult RefineOnAllData(const IdentificationResult& full, const ModelRecord
   return Refine(full, refine);
 }
 
+// The final model on all identification data and the criterion linearised there (std, detectable
+// sizes). A kept effect whose final value lies outside its physical range is marked implausible in
+// `tested` and dropped from `kept`, and the rest refined again: the fold fits can be plausible while
+// the fit on all data runs off (an IMU lever arm to its 300 mm bound on top of an acc bias).
+struct FinalModel {
+  std::map<std::string, double> parameters;
+  Effects effects;
+  std::vector<EffectKind> on_bound;  // kept effects whose final fit ended on a bound
+  internal::EffectLinearization linearization;
+  internal::EffectSubsetFit kept_fit;
+};
+FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::SelectionContext* context,
+                         std::vector<EffectKind>* kept, internal::TestedCandidates* tested) {
+  for (EffectMask previous = internal::MaskOf(*kept);;) {
+    FinalModel model;
+    model.parameters = all_data.parameters;
+    const EffectMask mask = internal::MaskOf(*kept);
+    internal::EnsureFitted(context, {mask}, previous);  // the folds warm-start the fit on all data
+    if (!context->records.count(mask)) {                // its refinement failed (a warning says so): the linear model
+      kept->clear();
+      continue;
+    }
+    previous = mask;
+    if (mask != 0) {
+      const RefineResult result = RefineOnAllData(all_data.linear, context->records.at(mask), context->options);
+      model.effects = result.effects;
+      model.parameters = NamedParameters(all_data.linear.system, result.refined.chi);
+      model.on_bound = result.on_bound;
+    }
+    model.linearization =
+        internal::LinearizeEffects(all_data.linear.flights, model.parameters, all_data.free_parameters, model.effects,
+                                   context->options.candidates);
+    model.kept_fit = internal::FitEffectSubset(model.linearization, KindsOf(mask));
+    const auto implausible = std::find_if(kept->begin(), kept->end(), [&](EffectKind kind) {
+      std::string& why = (*tested)[kind].implausible;
+      why = kind->Implausible(model.effects.Get(kind),
+                              internal::EffectColumns(model.kept_fit, kind, model.kept_fit.std), context->vehicle);
+      if (!why.empty()) why += " (refined on all identification data)";
+      return !why.empty();
+    });
+    if (implausible == kept->end()) return model;
+    kept->erase(implausible);
+  }
+}
+
 }  // namespace
 
 Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vector<ProcessedFlight>& held_out,
@@ -297,7 +343,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   timer.Mark("fold identifications");
   HeldOutEvaluator evaluator(options, std::move(data.folds), std::move(data.fold_linear), data.num_evaluation_flights,
                              progress);
-  internal::SelectionContext context{options, evaluator, diagnosis.warnings, {}};
+  internal::SelectionContext context{options, evaluator, diagnosis.warnings, {}, flights.front().vehicle};
   context.records[0] = evaluator.Baseline();
   diagnosis.baseline = context.records[0].gap;
   diagnosis.held_out_row_samples = context.records[0].held_out.row_samples();
@@ -305,36 +351,29 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
 
   // Which: forward selection on held-out data, then the backward pass.
   const internal::AllDataModel all_data{full, diagnosis.linear_parameters, internal::EssentialParameterNames(full)};
-  const internal::ForwardSelection forward = internal::SelectForward(&context, all_data, &timer);
+  internal::ForwardSelection forward = internal::SelectForward(&context, all_data, &timer);
   diagnosis.initial_delay_s = forward.initial_delay_s;
-  const internal::BackwardElimination backward = internal::EliminateBackward(&context, forward.selected);
+  internal::BackwardElimination backward = internal::EliminateBackward(&context, forward.selected);
   if (!backward.dropped.empty()) timer.Mark("backward elimination");
+
+  // The final model on all identification data, without kept effects that run off there; std and
+  // detectable sizes from the criterion linearised at it.
+  const FinalModel final_model = FitFinalModel(all_data, &context, &backward.kept, &forward.tested);
+  const internal::EffectLinearization& linearization = final_model.linearization;
+  const internal::EffectSubsetFit& kept_fit = final_model.kept_fit;
+  const std::vector<EffectKind>& on_bound = final_model.on_bound;
+  diagnosis.final_effects = final_model.effects;
+  diagnosis.final_parameters = final_model.parameters;
   diagnosis.selected = backward.kept;
   const EffectMask kept = internal::MaskOf(backward.kept);
+  const std::vector<EffectKind> kept_kinds = KindsOf(kept);
+  for (EffectKind kind : kept_kinds)
+    diagnosis.final_effects_std.Set(kind, internal::EffectColumns(kept_fit, kind, kept_fit.std));
+  timer.Mark("final refinement and linearisation");
 
   // How far: the held-out gap after each kept effect, in the order they were added.
   diagnosis.steps = internal::GapAfterEachEffect(&context, backward.kept);
   diagnosis.final_gap = context.records.at(kept).gap;
-
-  // The final model on all identification data.
-  diagnosis.final_parameters = diagnosis.linear_parameters;
-  std::vector<EffectKind> on_bound;  // kept effects whose final fit ended on a bound
-  if (kept != 0) {
-    const RefineResult result = RefineOnAllData(full, context.records.at(kept), options);
-    diagnosis.final_effects = result.effects;
-    diagnosis.final_parameters = NamedParameters(full.system, result.refined.chi);
-    on_bound = result.on_bound;
-    timer.Mark("final refinement");
-  }
-
-  // Std and detectable sizes from the criterion linearised at the final model.
-  const internal::EffectLinearization linearization = internal::LinearizeEffects(
-      full.flights, diagnosis.final_parameters, all_data.free_parameters, diagnosis.final_effects, options.candidates);
-  const std::vector<EffectKind> kept_kinds = KindsOf(kept);
-  const internal::EffectSubsetFit kept_fit = internal::FitEffectSubset(linearization, kept_kinds);
-  for (EffectKind kind : kept_kinds)
-    diagnosis.final_effects_std.Set(kind, internal::EffectColumns(kept_fit, kind, kept_fit.std));
-  timer.Mark("linearisation");
 
   // Verdicts, confounding, notes and ranking.
   const internal::SelectionOutcome outcome{forward,       backward, diagnosis.steps, diagnosis.final_effects,

@@ -80,8 +80,11 @@ std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle) {
 
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
-                                     const std::vector<std::string>& free_parameters, const Effects& effects,
+                                     const std::vector<std::string>& free_parameters, const Effects& given,
                                      const std::vector<EffectKind>& kinds, int max_row_samples) {
+  // The rows' Jets take a value of every free effect: per-rotor ones absent from `given` at zero.
+  Effects effects = given;
+  for (EffectKind kind : kinds) effects.Set(kind, given.Get(kind, flights.front().vehicle));
   EffectLinearization out;
   out.kinds = kinds;
   for (size_t k = 0; k < kinds.size(); ++k)
@@ -193,26 +196,33 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
 
 EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const std::vector<EffectKind>& subset) {
   const Eigen::Index p = linearization.parameter_jacobian.cols(), n = linearization.scored_rows;
-  std::vector<Eigen::Index> chi(static_cast<size_t>(p)), effect;  // columns of the Gram matrix
-  for (Eigen::Index c = 0; c < p; ++c) chi[static_cast<size_t>(c)] = c;
+  std::vector<Eigen::Index> all(static_cast<size_t>(p));  // columns of the Gram matrix: chi, then the subset's
+  for (Eigen::Index c = 0; c < p; ++c) all[static_cast<size_t>(c)] = c;
   EffectSubsetFit fit;
   for (size_t c = 0; c < linearization.labels.size(); ++c) {
     const EffectKind kind = linearization.kinds[linearization.column_kind[c]];
     if (std::find(subset.begin(), subset.end(), kind) == subset.end()) continue;
-    effect.push_back(p + static_cast<Eigen::Index>(c));
+    all.push_back(p + static_cast<Eigen::Index>(c));
     fit.labels.push_back(linearization.labels[c]);
     fit.column_kind.push_back(kind);
   }
-  const Eigen::Index e = static_cast<Eigen::Index>(effect.size());
-  std::vector<Eigen::Index> all = chi;
-  all.insert(all.end(), effect.begin(), effect.end());
-  const Eigen::MatrixXd& gram = linearization.gram;
-  const Eigen::VectorXd& g = linearization.gram_residual;
+  const Eigen::Index e = static_cast<Eigen::Index>(fit.labels.size());
+  // A zero-sum effect (per-rotor thrust scales) moves within sum = 0, as the refinement pins it: its
+  // columns are projected onto that subspace (their sum is kt's and kd's columns), and so are its
+  // step and covariance (the pseudo-inverse's part along the all-ones direction is arbitrary).
+  Eigen::MatrixXd projector = Eigen::MatrixXd::Identity(p + e, p + e);
+  for (Eigen::Index c = 0; c < e;) {
+    Eigen::Index end = c;
+    while (end < e && fit.column_kind[end] == fit.column_kind[c]) ++end;
+    if (fit.column_kind[c]->info().zero_sum) projector.block(p + c, p + c, end - c, end - c).array() -= 1.0 / (end - c);
+    c = end;
+  }
+  const Eigen::MatrixXd gram = projector * linearization.gram(all, all) * projector;
+  const Eigen::VectorXd gradient = projector * linearization.gram_residual(all);
 
-  const Eigen::MatrixXd covariance_unit = NormalInverse(gram(all, all));
-  const Eigen::MatrixXd chi_inverse = NormalInverse(gram(chi, chi));
-  const Eigen::VectorXd gradient = g(all);
-  const Eigen::VectorXd chi_gradient = g(chi);
+  const Eigen::MatrixXd covariance_unit = projector * NormalInverse(gram) * projector;
+  const Eigen::MatrixXd chi_inverse = NormalInverse(gram.topLeftCorner(p, p));
+  const Eigen::VectorXd chi_gradient = gradient.head(p);
   const double ssr = linearization.residual_ssr;
   const double removed = gradient.dot(covariance_unit * gradient) - chi_gradient.dot(chi_inverse * chi_gradient);
   fit.predicted_shrink = ssr > 0.0 ? std::max(0.0, removed) / ssr : 0.0;
@@ -225,11 +235,11 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
   fit.correlation = inverse_std.asDiagonal() * effect_cov * inverse_std.asDiagonal();
   fit.effective_samples = static_cast<double>(n) / linearization.autocorrelation_factor;
   // Signatures with chi projected out, E - P M with M = (P^T P)^+ P^T E, from the Gram blocks.
-  const Eigen::MatrixXd chi_effect = gram(chi, effect);
+  const Eigen::MatrixXd chi_effect = gram.topRightCorner(p, e);
   const Eigen::MatrixXd m = chi_inverse * chi_effect;
-  const Eigen::VectorXd projected_dot_r = g(effect) - m.transpose() * chi_gradient;
-  const Eigen::MatrixXd projected_gram = gram(effect, effect) - chi_effect.transpose() * m -
-                                         m.transpose() * chi_effect + m.transpose() * gram(chi, chi) * m;
+  const Eigen::VectorXd projected_dot_r = gradient.tail(e) - m.transpose() * chi_gradient;
+  const Eigen::MatrixXd projected_gram = gram.bottomRightCorner(e, e) - chi_effect.transpose() * m -
+                                         m.transpose() * chi_effect + m.transpose() * gram.topLeftCorner(p, p) * m;
   fit.residual_correlation.resize(e);
   const double r_norm = std::sqrt(ssr);
   for (Eigen::Index c = 0; c < e; ++c) {
@@ -240,7 +250,7 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
 }
 
 Eigen::VectorXd EffectColumns(const EffectSubsetFit& fit, EffectKind kind, const Eigen::VectorXd& per_column) {
-  Eigen::VectorXd out(EffectDimension(kind));
+  Eigen::VectorXd out(std::count(fit.column_kind.begin(), fit.column_kind.end(), kind));
   int k = 0;
   for (size_t c = 0; c < fit.column_kind.size(); ++c)
     if (fit.column_kind[c] == kind) out[k++] = per_column[static_cast<Eigen::Index>(c)];

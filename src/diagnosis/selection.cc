@@ -121,8 +121,10 @@ void ScreenCandidate(EffectKind kind, const EffectLinearization& linearization, 
                      double base_shrink, const IdentificationResult& full, const DiagnosisOptions& options,
                      TestedCandidate* t) {
   const EffectSubsetFit fit = FitEffectSubset(linearization, KindsOf(t->base | Bit(kind)));
+  const Vehicle& vehicle = full.flights.front().vehicle;
   const Eigen::VectorXd own_step = EffectColumns(fit, kind, fit.step);
-  t->linearized_value = point.effects.Get(kind) + own_step;
+  t->linearized_value = point.effects.Get(kind, vehicle) + own_step;
+  t->linearized_std = EffectColumns(fit, kind, fit.std);
   t->linearized_step = Effects{};
   for (EffectKind k : KindsOf(t->base | Bit(kind))) t->linearized_step.Set(k, EffectColumns(fit, k, fit.step));
   // A sign-constrained effect (tau >= 0) stays in its range; at the bound, a first-order step
@@ -137,7 +139,8 @@ void ScreenCandidate(EffectKind kind, const EffectLinearization& linearization, 
   // screening of such effects also takes the best in-sample shrink over a coarse grid.
   if (!ScreeningGrid(kind, options).empty())
     predicted = std::max(predicted, GridShrinkFraction(full, point.effects, kind, options));
-  t->screening = ScreeningTest(predicted, EffectDimension(kind), fit.effective_samples, linearization.scored_rows);
+  t->screening =
+      ScreeningTest(predicted, kind->FreeDimension(vehicle), fit.effective_samples, linearization.scored_rows);
   t->test = t->screening;
   if (t->step == 1) t->alone = t->test;
 }
@@ -183,13 +186,13 @@ namespace {
 // (adding a lag on top of a delay shortens the delay). The rotor-signal effects are nonlinear far
 // from zero: alone, they start where the coarse delay search points instead.
 std::vector<Effects> WarmStarts(EffectKind kind, EffectMask selected, const ModelRecord& base,
-                                const Effects& step_effects, double initial_delay_s) {
+                                const Effects& step_effects, double initial_delay_s, const Vehicle& vehicle) {
   bool rotor_alone = kind->stage() == EffectStage::kRotorSignal;
   for (EffectKind k : KindsOf(selected)) rotor_alone = rotor_alone && k->stage() != EffectStage::kRotorSignal;
   std::vector<Effects> starts = base.fold_effects;
   for (Effects& start : starts) {
     for (EffectKind k : KindsOf(selected | Bit(kind))) {
-      Eigen::VectorXd value = start.Get(k) + step_effects.Get(k);
+      Eigen::VectorXd value = start.Get(k, vehicle) + step_effects.Get(k, vehicle);
       if (k->info().lower_bound == 0.0) value = value.cwiseMax(0.0);
       start.Set(k, value);
     }
@@ -198,8 +201,10 @@ std::vector<Effects> WarmStarts(EffectKind kind, EffectMask selected, const Mode
   return starts;
 }
 
-// Tests each refined candidate on top of `base` and keeps its record; returns the index of the one
-// with the smallest held-out residual (-1 when every refinement failed).
+// Tests each refined candidate on top of `base` and keeps its record; marks the significant ones whose
+// fold-mean value is outside the physical range (they buy their shrink with it, absorbing something
+// else); returns the index of the plausible one with the smallest held-out residual (-1 when there is
+// none).
 int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fit, const ModelRecord& base,
                  EffectMask selected, std::vector<ModelRecord> fitted, TestedCandidates* tested,
                  std::vector<std::pair<EffectKind, EffectTest>>* refined) {
@@ -214,14 +219,19 @@ int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fi
       continue;
     }
     TestedCandidate& t = (*tested)[to_fit[c]];
-    t.test = TestAddedEffects(base.gap, record.gap, EffectDimension(to_fit[c]), options.alpha, options.min_shrink_pct);
+    t.test = TestAddedEffects(base.gap, record.gap, to_fit[c]->FreeDimension(context->vehicle), options.alpha,
+                              options.min_shrink_pct);
     if (t.step == 1) t.alone = t.test;
-    refined->emplace_back(to_fit[c], t.test);
-    if (best < 0 || record.gap.whitened_ssr < best_ssr) {
-      best = static_cast<int>(c);
-      best_ssr = record.gap.whitened_ssr;
-    }
+    if (t.test.significant)
+      t.implausible = to_fit[c]->Implausible(MeanFoldEffect(record, to_fit[c]), t.linearized_std, context->vehicle);
+    const double ssr = record.gap.whitened_ssr;
     context->records[record.mask] = std::move(record);
+    if (!t.implausible.empty()) continue;  // neither selected nor a rival of the selected one
+    refined->emplace_back(to_fit[c], t.test);
+    if (best < 0 || ssr < best_ssr) {
+      best = static_cast<int>(c);
+      best_ssr = ssr;
+    }
   }
   return best;
 }
@@ -236,8 +246,11 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
   for (int step = 1;; ++step) {
     if (static_cast<int>(forward.selected.size()) >= options.max_effects) break;
     std::vector<EffectKind> remaining;
-    for (EffectKind kind : options.candidates)
-      if (!Has(selected, kind)) remaining.push_back(kind);
+    for (EffectKind kind : options.candidates) {
+      const auto t = forward.tested.find(kind);
+      if (!Has(selected, kind) && (t == forward.tested.end() || t->second.implausible.empty()))
+        remaining.push_back(kind);
+    }
     if (remaining.empty()) break;
     const ModelRecord& base = context->records.at(selected);
     const std::vector<EffectKind> to_fit =
@@ -259,8 +272,8 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
         timer->Mark("coarse delay search");
       }
       masks.push_back(selected | Bit(kind));
-      initial.push_back(
-          WarmStarts(kind, selected, base, forward.tested[kind].linearized_step, forward.initial_delay_s));
+      initial.push_back(WarmStarts(kind, selected, base, forward.tested[kind].linearized_step, forward.initial_delay_s,
+                                   context->vehicle));
     }
     std::vector<ModelRecord> fitted = context->fitter.Fit(masks, initial);
     timer->Mark("step " + std::to_string(step) + " fold refinements");
@@ -292,9 +305,9 @@ BackwardElimination EliminateBackward(SelectionContext* context, const std::vect
       const EffectMask others = mask & ~Bit(kind);
       EnsureFitted(context, {others}, mask);
       if (!context->records.count(others)) continue;
-      const EffectTest test =
-          TestAddedEffects(context->records.at(others).gap, context->records.at(mask).gap, EffectDimension(kind),
-                           context->options.alpha, context->options.min_shrink_pct);
+      const EffectTest test = TestAddedEffects(context->records.at(others).gap, context->records.at(mask).gap,
+                                               kind->FreeDimension(context->vehicle), context->options.alpha,
+                                               context->options.min_shrink_pct);
       if (test.significant) continue;
       result.dropped.push_back({kind, others, test});
       mask = others;
@@ -320,7 +333,7 @@ std::vector<SelectionStep> GapAfterEachEffect(SelectionContext* context, const s
     prefix |= Bit(kind);
     if (!context->records.count(prefix)) break;
     s.after = context->records.at(prefix).gap;
-    s.test = TestAddedEffects(s.before, s.after, EffectDimension(kind), context->options.alpha,
+    s.test = TestAddedEffects(s.before, s.after, kind->FreeDimension(context->vehicle), context->options.alpha,
                               context->options.min_shrink_pct);
     steps.push_back(s);
   }

@@ -56,12 +56,14 @@ class ModelFitter {
 };
 
 // What the selection steps share: the options (candidates: the available ones), the models refined
-// so far by effect set (0: the linear model), the fitter that refines more, and the warnings.
+// so far by effect set (0: the linear model), the fitter that refines more, the warnings, and the
+// vehicle (per-rotor effects' sizes, the physical ranges).
 struct SelectionContext {
   const DiagnosisOptions& options;
   ModelFitter& fitter;
   std::vector<std::string>& warnings;
   std::map<EffectMask, ModelRecord> records;
+  const Vehicle& vehicle;
 };
 
 // Refines the models of `masks` that are not refined yet, warm-started from the fold fits of
@@ -98,7 +100,11 @@ struct TestedCandidate {
   EffectTest screening;
   std::optional<EffectTest> alone;   // the test at step 1, on top of the linear model
   Eigen::VectorXd linearized_value;  // one Gauss-Newton step on top of the base model
+  Eigen::VectorXd linearized_std;    // its std there
   Effects linearized_step;           // that step for every effect of the model (base and candidate)
+  // Significant when refined, but with a value outside its physical range
+  // (EffectDescriptor::Implausible): which value and range. Never selected, not tested again.
+  std::string implausible;
 };
 using TestedCandidates = std::map<EffectKind, TestedCandidate, EffectOrder>;
 
@@ -135,8 +141,10 @@ struct ForwardSelection {
 };
 
 // Forward selection: at each step the screened candidates are refined on top of the effects
-// selected so far; the one with the smallest held-out residual is kept while its F-test is
-// significant, up to options.max_effects.
+// selected so far; the one with the smallest held-out residual among those whose fold-mean value is
+// physically plausible is kept while its F-test is significant, up to options.max_effects. A
+// significant candidate with an implausible value is marked (TestedCandidate::implausible) and left
+// out of the later steps.
 ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& all_data, PhaseTimer* timer);
 
 // Selected by the forward selection, then not significant on top of `others`.

@@ -29,6 +29,10 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
   std::ostringstream note;
   if (v.status == "selected") {
     note << "held-out gap shrinks " << std::fixed << std::setprecision(1) << v.test.shrink_pct << " %";
+  } else if (v.status == "implausible") {
+    note << "implausible: absorbs something else; " << v.implausible << " (its held-out shrink of " << std::fixed
+         << std::setprecision(1) << v.test.shrink_pct << " % on top of " << Join(v.tested_on_top_of)
+         << " is bought with that value: not selected)";
   } else if (v.dropped_as_redundant) {
     note << "selected early, but not significant once " << Join(v.tested_on_top_of) << " were in (held-out shrink "
          << std::setprecision(2) << std::fixed << v.test.shrink_pct << " %): dropped as redundant";

@@ -78,7 +78,8 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
   if (!v.selected) subset.push_back(kind);
   const EffectSubsetFit fit = v.selected ? outcome.kept_fit : FitEffectSubset(outcome.linearization, subset);
   v.std = EffectColumns(fit, kind, fit.std);
-  v.detectable_above = DetectableSizes(v.std, EffectDimension(kind), fit.effective_samples, context.options);
+  v.detectable_above =
+      DetectableSizes(v.std, kind->FreeDimension(context.vehicle), fit.effective_samples, context.options);
   if (v.selected) {
     v.value = outcome.final_effects.Get(kind);
     v.status = "selected";
@@ -88,8 +89,12 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
     else if (tested)
       v.value = t->second.linearized_value;
     else
-      v.value = Eigen::VectorXd::Zero(EffectDimension(kind));
+      v.value = Eigen::VectorXd::Zero(kind->Dimension(context.vehicle));
     v.status = "not significant";
+  }
+  if (tested && !t->second.implausible.empty() && !v.selected) {
+    v.status = "implausible";
+    v.implausible = t->second.implausible;
   }
   ApplyKeptStep(outcome.steps, &v);
   ApplyDropped(context, outcome.backward.dropped, &v);

@@ -41,6 +41,10 @@ const EffectDescriptor& AccDelayEffect() {
     i.upper_bound = 0.05;
     i.draw = {DrawShape::kUniform, 0.002, 0.008};
     i.simulator_limit = {true, -0.05, 0.05};
+    // Accelerometer and gyro filters on board differ by a few ms (PX4's 30 Hz accelerometer low-pass about
+    // 5 ms behind its gyro's); beyond 20 ms either way the streams are misaligned by something else.
+    i.plausible = {true, -0.02, 0.03, PlausibleScale::kNone,
+                   "on-board filters put the accelerometer a few ms behind the gyro"};
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";

@@ -61,6 +61,9 @@ const EffectDescriptor& BatteryEffect() {
     // The simulator flies it with its battery (SimulationOptions::battery: a command log with a voltage).
     i.draw = {DrawShape::kUniform, 0.5, 1.5};
     i.simulator_limit = {true, 0.0, 3.0};
+    // beta = 1: the motor sees duty x voltage; a motor's load curve keeps it within 0..2. Negative:
+    // faster on a flatter battery.
+    i.plausible = {true, 0.0, 2.0, PlausibleScale::kNone, "the motor sees about duty x voltage (beta = 1)"};
     i.settle_tolerance = 1e-4;
     i.inputs = {FlightInput::kRotorCommand, FlightInput::kVoltage};
     return i;

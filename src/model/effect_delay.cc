@@ -31,8 +31,8 @@ struct DelayModel {
       const Eigen::Index i = k - offset - 1;
       const T p0 = sample(i - 1), p1 = sample(i), p2 = sample(i + 1), p3 = sample(i + 2);
       (*out)[k] = p1 + T(0.5) * u *
-                           ((p2 - p0) + u * ((T(2.0) * p0 - T(5.0) * p1 + T(4.0) * p2 - p3) +
-                                             u * (T(3.0) * (p1 - p2) + p3 - p0)));
+                           ((p2 - p0) +
+                            u * ((T(2.0) * p0 - T(5.0) * p1 + T(4.0) * p2 - p3) + u * (T(3.0) * (p1 - p2) + p3 - p0)));
     }
   }
   static double CommandDelay(const Eigen::VectorXd& v) { return v[0]; }
@@ -57,6 +57,9 @@ const EffectDescriptor& DelayEffect() {
     i.grid_searched = true;
     i.draw = {DrawShape::kUniform, 0.005, 0.040};
     i.simulator_limit = {true, 0.0, 0.05};
+    // A rotor speed measured through a filter can be logged up to ~30 ms after it acts; ESC latency and a
+    // few control periods stay under ~150 ms. Beyond, the logs' clocks disagree or a lag hides in it.
+    i.plausible = {true, -0.03, 0.15, PlausibleScale::kNone, "ESC latency and a few control periods"};
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";

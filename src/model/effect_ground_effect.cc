@@ -40,9 +40,12 @@ const EffectDescriptor& GroundEffectEffect() {
     i.chain_position = 3;
     i.dimension = 1;
     i.lower_bound = 0.0;
-    i.upper_bound = 3.0;  // (R / 4h)^2 <= 1/4 at h = R / 2: the factor stays finite below 4
+    i.upper_bound = 3.0;                       // (R / 4h)^2 <= 1/4 at h = R / 2: the factor stays finite below 4
     i.draw = {DrawShape::kUniform, 0.5, 1.5};  // the image-rotor model's 1, give or take
     i.simulator_limit = {true, 0.0, 3.0};
+    // Cheeseman-Bennett's rotor has rho = 1; multirotor measurements fit about 0.5-2. Negative: less
+    // thrust near the ground.
+    i.plausible = {true, 0.0, 2.0, PlausibleScale::kNone, "Cheeseman-Bennett's rotor has 1"};
     i.settle_tolerance = 1e-3;
     i.inputs = {FlightInput::kHeight, FlightInput::kRotorRadius};
     // Only flights near the ground (take-off, landing, low hover) carry it: used when named.

@@ -45,6 +45,8 @@ const EffectDescriptor& AccBiasEffect() {
     i.upper_bound = 2.0;
     i.draw = {DrawShape::kSignedPerAxis, 0.1, 0.5};
     i.simulator_limit = {false, 0.0, 5.0};
+    // A MEMS accelerometer's zero-g offset, uncalibrated and over temperature, is at most ~150 mg.
+    i.plausible = {true, -2.0, 2.0, PlausibleScale::kNone, "a MEMS accelerometer's zero-g offset is under ~150 mg"};
     i.settle_tolerance = 1e-4;
     i.display_unit = "m/s^2";
     return i;
@@ -66,6 +68,8 @@ const EffectDescriptor& GyroBiasEffect() {
     i.upper_bound = 0.2;
     i.draw = {DrawShape::kSignedPerAxis, 0.005, 0.03};
     i.simulator_limit = {false, 0.0, 0.5};
+    // A MEMS gyro's zero-rate offset is at most a few deg/s before the boot calibration removes it.
+    i.plausible = {true, -0.1, 0.1, PlausibleScale::kNone, "a MEMS gyro's zero-rate offset is a few deg/s"};
     i.settle_tolerance = 1e-4;
     i.display_unit = "rad/s";
     return i;

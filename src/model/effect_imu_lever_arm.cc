@@ -45,6 +45,9 @@ const EffectDescriptor& ImuLeverArmEffect() {
     i.upper_bound = 0.3;
     i.draw = {DrawShape::kRandomDirection, 0.01, 0.03};  // 1-3 cm: a flight controller off the centre
     i.simulator_limit = {false, 0.0, 0.3};
+    // The IMU sits on the frame: within an arm's length of O_d.
+    i.plausible = {false, 0.0, 1.0, PlausibleScale::kArmLength,
+                   "the IMU sits on the frame, within an arm's length of O_d"};
     i.settle_tolerance = 1e-4;  // 0.1 mm
     i.display_scale = 1e3;
     i.display_unit = "mm";

@@ -43,6 +43,8 @@ const EffectDescriptor& MisalignmentEffect() {
     i.upper_bound = 0.5;
     i.draw = {DrawShape::kRandomDirection, 1.0, 4.0, kDegToRad};
     i.simulator_limit = {false, 0.0, 0.3};
+    // A board mounted visibly crooked is ~10 deg off; beyond, the vehicle file's IMU orientation is wrong.
+    i.plausible = {false, 0.0, 10.0 * kDegToRad, PlausibleScale::kNone, "a crooked mount is a few deg off"};
     i.settle_tolerance = 1e-5;
     i.display_scale = kRadToDeg;
     i.display_unit = "deg";

@@ -59,6 +59,10 @@ const EffectDescriptor& MotorLagEffect() {
     i.screening_grid = {0.01, 0.02, 0.04, 0.08, 0.15, 0.3};
     i.draw = {DrawShape::kUniform, 0.020, 0.060};
     i.simulator_limit = {true, 0.0, 0.08};
+    // Motor and propeller time constants: 10-30 ms small brushless, 20-60 ms brushed (the Crazyflie's
+    // measured PWM -> RPM 59 ms), ~100 ms the largest propellers. A longer lag smooths away something else
+    // (MODEL.md 9: it ran to 300 ms on PWM-driven Crazyflies).
+    i.plausible = {true, 0.0, 0.15, PlausibleScale::kNone, "motors and propellers respond within ~100 ms"};
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";

@@ -50,6 +50,9 @@ const EffectDescriptor& RotorDragEffect() {
     // The paper's vehicle (1.3 kg, 0.45 m): 0.04-0.2 N of drag at 1 m/s and 500 rad/s per rotor.
     i.draw = {DrawShape::kUniform, 1e-5, 5e-5};
     i.simulator_limit = {true, 0.0, 1e-3};
+    // Drag opposes the hub's motion and flapping tilts the rotor away from it: both non-negative (which
+    // the bounds already keep); no upper limit without the rotor speed.
+    i.plausible = {true, 0.0, HUGE_VAL, PlausibleScale::kNone, "drag opposes the hub's motion"};
     i.settle_tolerance = 1e-8;
     i.display_unit = "N s/m per rad/s";
     i.inputs = {FlightInput::kVelocity};

@@ -35,6 +35,9 @@ const EffectDescriptor& RotorThrustScaleEffect() {
     i.upper_bound = 0.5;
     i.draw = {DrawShape::kUniform, -0.03, 0.03};  // a few percent between propellers of one batch
     i.simulator_limit = {true, -0.3, 0.3};
+    // Propellers and motors of one batch differ by a few %, a chipped or worn propeller by up to ~10 %;
+    // tens of percent stand in for something else (a rotor position or spin wrong in the vehicle file).
+    i.plausible = {true, -0.1, 0.1, PlausibleScale::kNone, "propellers and motors differ by a few %"};
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e2;
     i.display_unit = "%";

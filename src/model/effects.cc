@@ -80,7 +80,8 @@ std::vector<std::string> EffectDescriptor::Labels(int dimension) const {
   std::vector<std::string> labels;
   const char* axes[3] = {"_x", "_y", "_z"};
   for (int k = 0; k < dimension; ++k)
-    labels.push_back(info_.parameter_name + (dimension == 3 && !info_.per_rotor ? std::string(axes[k]) : "_" + std::to_string(k + 1)));
+    labels.push_back(info_.parameter_name +
+                     (dimension == 3 && !info_.per_rotor ? std::string(axes[k]) : "_" + std::to_string(k + 1)));
   return labels;
 }
 
@@ -121,6 +122,55 @@ std::string EffectDescriptor::CheckSimulatable(const Eigen::VectorXd& value) con
   return {};
 }
 
+namespace {
+
+// The size a physical range scales with, for this vehicle.
+double PlausibleScaleOf(PlausibleScale scale, const Vehicle& vehicle) {
+  double arm_m = 0.0;
+  for (const Rotor& rotor : vehicle.rotors) arm_m += rotor.position_m.head<2>().norm();
+  arm_m /= std::max(1, vehicle.num_rotors());
+  switch (scale) {
+    case PlausibleScale::kNone:
+      return 1.0;
+    case PlausibleScale::kArmLength:
+      return arm_m;
+    case PlausibleScale::kMassArmSquared:
+      return vehicle.mass_kg * arm_m * arm_m;
+  }
+  return 1.0;
+}
+
+}  // namespace
+
+std::string EffectDescriptor::Implausible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev,
+                                          const Vehicle& vehicle) const {
+  const PlausibleRange& range = info_.plausible;
+  const double scale = PlausibleScaleOf(range.scale, vehicle);
+  const double low = range.low * scale, high = range.high * scale;
+  auto sd = [&](Eigen::Index k) { return k < std_dev.size() ? std_dev[k] : 0.0; };
+  constexpr double kStd = 3.0;  // an estimate within 3 std of the range may lie inside it
+  auto shown = [&](double v) { return Format(Eigen::VectorXd::Constant(1, v), {}); };
+  const std::string because = range.why.empty() ? "" : ": " + range.why;
+  if (range.per_coordinate) {
+    const std::vector<std::string> labels = Labels(static_cast<int>(value.size()));
+    for (Eigen::Index k = 0; k < value.size(); ++k)
+      if (value[k] < low - kStd * sd(k) || value[k] > high + kStd * sd(k))
+        return (value.size() == 1 ? info_.parameter_name : labels[static_cast<size_t>(k)]) + " = " +
+               Format(value.segment(k, 1),
+                      std_dev.size() > k ? Eigen::VectorXd(std_dev.segment(k, 1)) : Eigen::VectorXd()) +
+               " is outside its physical range [" + (std::isfinite(low) ? shown(low) : "-inf") + ", " +
+               (std::isfinite(high) ? shown(high) : "inf") + "]" + because;
+    return {};
+  }
+  const double norm = value.norm();
+  double norm_std = 0.0;  // along the estimate's direction
+  for (Eigen::Index k = 0; k < value.size() && norm > 0.0; ++k) norm_std += std::pow(value[k] / norm * sd(k), 2);
+  if (norm > high + kStd * std::sqrt(norm_std))
+    return info_.parameter_name + " = " + Format(value, std_dev) + " (norm " + shown(norm) +
+           ") is outside its physical range (norm <= " + shown(high) + ")" + because;
+  return {};
+}
+
 Eigen::VectorXd EffectDescriptor::Clamp(const Eigen::VectorXd& value) const {
   return value.cwiseMax(info_.lower_bound).cwiseMin(info_.upper_bound);
 }
@@ -133,7 +183,8 @@ void EffectDescriptor::TransformRotorSignal(const double*, const RotorSignalInpu
                                             Eigen::VectorXd*) const {
   NotOfStage(*this, "rotor-signal model");
 }
-void EffectDescriptor::TransformRotorSignal(const RotorJet*, const RotorSignalInput&, const Eigen::Matrix<RotorJet, -1, 1>&,
+void EffectDescriptor::TransformRotorSignal(const RotorJet*, const RotorSignalInput&,
+                                            const Eigen::Matrix<RotorJet, -1, 1>&,
                                             Eigen::Matrix<RotorJet, -1, 1>*) const {
   NotOfStage(*this, "rotor-signal model");
 }
@@ -203,6 +254,7 @@ std::vector<EffectKind> DefaultCandidates() {
 
 std::vector<EffectKind> ParseEffectList(const std::string& list) {
   if (list == "all") return DefaultCandidates();
+  if (list == "every") return AllEffects();
   std::vector<EffectKind> kinds;
   if (list.empty() || list == "none") return kinds;
   std::stringstream stream(list);
@@ -218,6 +270,11 @@ Eigen::VectorXd Effects::Get(EffectKind kind) const {
   const size_t i = static_cast<size_t>(kind->index());
   if (i < values_.size() && values_[i].size() > 0) return values_[i];
   return Eigen::VectorXd::Zero(std::max(0, kind->FixedDimension()));
+}
+
+Eigen::VectorXd Effects::Get(EffectKind kind, const Vehicle& vehicle) const {
+  const Eigen::VectorXd value = Get(kind);
+  return value.size() > 0 ? value : Eigen::VectorXd::Zero(kind->Dimension(vehicle));
 }
 
 void Effects::Set(EffectKind kind, const Eigen::Ref<const Eigen::VectorXd>& value) {

@@ -49,7 +49,7 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
       int free = 0;
       for (bool e : linear.solution.essential) free += e;
       // A zero-sum effect's sum is pinned: one free value fewer.
-      for (EffectKind k : entry.effects) free += k->Dimension(linear.flights.front().vehicle) - k->info().zero_sum;
+      for (EffectKind k : entry.effects) free += k->FreeDimension(linear.flights.front().vehicle);
       entry.num_parameters = free;
     }
     const int finished = ++done;

@@ -33,7 +33,10 @@ std::vector<std::optional<double>> Optional(const ComponentVector& v) {
 std::vector<double> Values(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
 std::string StatusTag(const std::string& status) {
-  const char* cls = status == "selected" ? "yes" : status == "confounded" ? "warn" : "nope";
+  const char* cls = status == "selected"      ? "yes"
+                    : status == "confounded"  ? "warn"
+                    : status == "implausible" ? "bad"
+                                              : "nope";
   return "<span class=\"tag " + std::string(cls) + "\">" + Html(status) + "</span>";
 }
 
@@ -44,7 +47,8 @@ std::string BandLabel(const BandGap& band) {
 // "value ± std unit" of the effect's parameter.
 std::string MagnitudeCell(const EffectVerdict& v) {
   const std::string name = EffectParameterName(v.kind);
-  return "<code>" + Html(name) + "</code><br/>" + ValueWithStd(Values(v.value), Values(v.std), EffectParameterUnit(name));
+  return "<code>" + Html(name) + "</code><br/>" +
+         ValueWithStd(Values(v.value), Values(v.std), EffectParameterUnit(name));
 }
 
 std::string DetectableCell(const EffectVerdict& v) {
@@ -102,7 +106,8 @@ std::string GapTables(const Diagnosis& d) {
   std::string rms;
   for (const auto& [label, gap] : models) {
     rms += std::string("<tr><td>") + label + "</td>";
-    for (const int c : kAllComponents) rms += "<td class=\"num\">" + FormatValue("%.4g", gap->residual_rms[c]) + "</td>";
+    for (const int c : kAllComponents)
+      rms += "<td class=\"num\">" + FormatValue("%.4g", gap->residual_rms[c]) + "</td>";
     rms += "</tr>\n";
   }
   std::string header;
@@ -146,10 +151,10 @@ std::string StretchTable(const GapLocation& where) {
       rates += (rates.empty() ? "" : " / ") + FormatValue("%.2f", s.angular_velocity_rms[k]);
     std::string activities;
     for (const std::string& a : s.activities) activities += (activities.empty() ? "" : ", ") + Html(a);
-    html += "<tr><td><code>" + Html(s.flight.substr(s.flight.find_last_of('/') + 1)) + "</code></td><td class=\"num\">" +
-            FormatValue("%.1f", s.start_s) + "</td><td class=\"num\">" + FormatValue("%.1f", s.end_s) +
-            "</td><td class=\"num\">" + FormatValue("%.2f", s.mean_square_ratio) + "&times;</td><td>" +
-            Html(kWrenchComponentNames[s.dominant_component]) + "</td>" +
+    html += "<tr><td><code>" + Html(s.flight.substr(s.flight.find_last_of('/') + 1)) +
+            "</code></td><td class=\"num\">" + FormatValue("%.1f", s.start_s) + "</td><td class=\"num\">" +
+            FormatValue("%.1f", s.end_s) + "</td><td class=\"num\">" + FormatValue("%.2f", s.mean_square_ratio) +
+            "&times;</td><td>" + Html(kWrenchComponentNames[s.dominant_component]) + "</td>" +
             ComponentCells(s.relative_error_pct, kRotorComponents) + "<td class=\"num\">" + rates +
             "</td><td class=\"num\">" + FormatValue("%+.2f", s.mean_vertical_acceleration_mps2) + "</td><td>" +
             activities + "</td></tr>\n";
@@ -205,7 +210,7 @@ std::vector<FigureSpec> DiagnosisFigures(const Diagnosis& d) {
       "Left: the held-out gap (Table III relative error) per component with the linear model (baseline), after each "
       "effect the forward selection kept, and with all selected effects (final). Right: how much of the held-out "
       "gap each candidate removes, coloured by its status (green selected, orange confounded with a selected "
-      "effect, grey not significant).";
+      "effect, red implausible: a value outside its physical range, grey not significant).";
   specs.push_back(std::move(gap));
 
   std::vector<BandBars> bands;

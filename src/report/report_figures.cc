@@ -476,15 +476,21 @@ FigureSpec DiagnosisFigure(const std::string& name, const std::vector<GapSeries>
     int i = 0;
     for (const RankedEffect& r : ranking) {
       if (!r.shrink_pct) continue;
-      // Selected effects green, confounded orange, the rest grey: "lc rgb variable" reads an integer.
-      const int colour = r.status == "selected" ? 0x2ca02c : r.status == "confounded" ? 0xff7f0e : 0xb0b0b0;
+      // Selected effects green, confounded orange, implausible red, the rest grey: "lc rgb variable" reads an
+      // integer.
+      const int colour = r.status == "selected"      ? 0x2ca02c
+                         : r.status == "confounded"  ? 0xff7f0e
+                         : r.status == "implausible" ? 0xd62728
+                                                     : 0xb0b0b0;
       f.data +=
           std::to_string(i++) + " " + Token(r.effect) + " " + Num(*r.shrink_pct) + " " + std::to_string(colour) + "\n";
     }
     f.data += "\n\n";
     body += "set style data boxes\nset style fill solid 0.85 noborder\nset boxwidth 0.6\nset autoscale y\n";
     body += "set xrange [-0.6:" + std::to_string(i) + "-0.4]\nset xtics rotate by -30 nomirror\n";
-    body += "set title 'Held-out gap removed by each effect (%): green selected, orange confounded' font ',11'\n";
+    body +=
+        "set title 'Held-out gap removed by each effect (%): green selected, orange confounded, red implausible' font "
+        "',11'\n";
     body += "set ylabel 'shrink (%)'\nunset key\n";
     body += "set arrow 2 from graph 0, first 0 to graph 1, first 0 nohead lc rgb '#555555'\n";
     body += "plot $DATA index " + std::to_string(block) + " using 1:3:4:xtic(2) with boxes lc rgb variable notitle, " +

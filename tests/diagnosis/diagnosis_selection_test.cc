@@ -83,7 +83,8 @@ struct SelectionFixture {
   DiagnosisOptions options;  // alpha 1e-3, shrink floor 0.3 %
   TableFitter fitter;
   std::vector<std::string> warnings;
-  SelectionContext context{options, fitter, warnings, {}};
+  Vehicle vehicle;
+  SelectionContext context{options, fitter, warnings, {}, vehicle};
 
   void Add(ModelRecord record) { context.records[record.mask] = std::move(record); }
 };
@@ -245,7 +246,8 @@ struct RivalFixture {
   }
   ModelRecord with_delay, with_lag;
   // Unit residual RMS, no rotor wrench: the residuals enter the comparison as they are.
-  const HeldOutScales scales{Eigen::MatrixXd::Ones(1, kNumWrenchComponents), Eigen::MatrixXd::Zero(1, kNumWrenchComponents)};
+  const HeldOutScales scales{Eigen::MatrixXd::Ones(1, kNumWrenchComponents),
+                             Eigen::MatrixXd::Zero(1, kNumWrenchComponents)};
   const double alpha = 1e-3;
 };
 

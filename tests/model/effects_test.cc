@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "rotorid/core/error.h"
@@ -36,6 +37,7 @@ TEST(EffectRegistryTest, NamesAreUniqueAndParseInEitherForm) {
   const std::vector<EffectKind> in_all = DefaultCandidates();
   EXPECT_EQ(std::count(in_all.begin(), in_all.end(), lever_arm), 0);
   EXPECT_EQ(ParseEffectList("delay,imu_lever_arm").back(), lever_arm);
+  EXPECT_EQ(ParseEffectList("every"), AllEffects());
   EXPECT_THROW(ParseEffectKind("wind"), Error);
 }
 
@@ -72,6 +74,45 @@ TEST(EffectsTest, FormatUsesTheDisplayUnit) {
   EXPECT_EQ(ParseEffectKind("delay")->Format(Eigen::VectorXd::Constant(1, 0.0123), Eigen::VectorXd()), "12.3 ms");
   EXPECT_EQ(ParseEffectKind("acc_bias")->Format(Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::VectorXd()),
             "(0.1, 0.2, 0.3) m/s^2");
+}
+
+// The physical ranges (MODEL.md 8): every effect has one at least as wide as what the simulator's
+// studies draw, some scale with the vehicle, and an estimate outside by more than 3 std is named with
+// its range.
+TEST(EffectsTest, PhysicalRangesScaleWithTheVehicleAndAllowThreeStd) {
+  const SimulationVehicle b = PresetVehicle("B"), cf = PresetVehicle("CF");
+  for (EffectKind kind : AllEffects()) {
+    const PlausibleRange& range = kind->info().plausible;
+    EXPECT_FALSE(range.why.empty()) << kind->name();
+    EXPECT_LT(range.low, range.high) << kind->name();
+    // The simulator's realistic draws (sized for the paper's vehicle) are plausible on it.
+    const DrawRange& draw = kind->info().draw;
+    const int n = kind->Dimension(b.vehicle);
+    const double high = draw.high * draw.to_si;
+    const Eigen::VectorXd value = draw.shape == DrawShape::kRandomDirection
+                                      ? Eigen::VectorXd(Eigen::VectorXd::Constant(n, high / std::sqrt(n)))
+                                      : Eigen::VectorXd(Eigen::VectorXd::Constant(n, high));
+    EXPECT_EQ(kind->Implausible(value, {}, b.vehicle), "") << kind->name();
+  }
+  // The lever arm is bounded by the arm length: 0.225 m on B, 0.046 m on the Crazyflie.
+  const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
+  const Eigen::Vector3d arm(0.0, 0.0, -0.1);
+  EXPECT_EQ(lever_arm->Implausible(arm, {}, b.vehicle), "");
+  const std::string why = lever_arm->Implausible(arm, {}, cf.vehicle);
+  EXPECT_NE(why.find("imu_position_m = (0, 0, -100) mm (norm 100 mm) is outside its physical range (norm <= 46 mm)"),
+            std::string::npos)
+      << why;
+  // 3 std of slack: 0.2 +- 0.04 is within 3 std of 0.1, 0.2 +- 0.03 is not.
+  const EffectKind scale = ParseEffectKind("rotor_thrust_scale");
+  const Eigen::Vector4d scales(0.2, -0.1, -0.05, -0.05);
+  EXPECT_EQ(scale->Implausible(scales, Eigen::Vector4d::Constant(0.04), b.vehicle), "");
+  EXPECT_EQ(scale->Implausible(scales, Eigen::Vector4d::Constant(0.03), b.vehicle),
+            "rotor_thrust_scale_1 = 20 +- 3 % is outside its physical range [-10 %, 10 %]: propellers and motors "
+            "differ by a few %");
+  // Rotor inertia scales with mass x arm^2: 1e-5 kg m^2 is plausible on B, not on the Crazyflie.
+  const EffectKind inertia = ParseEffectKind("rotor_inertia");
+  EXPECT_EQ(inertia->Implausible(Eigen::VectorXd::Constant(1, 1e-5), {}, b.vehicle), "");
+  EXPECT_NE(inertia->Implausible(Eigen::VectorXd::Constant(1, 1e-5), {}, cf.vehicle), "");
 }
 
 // An effect that needs an input a log lacks is unavailable, with the reason.

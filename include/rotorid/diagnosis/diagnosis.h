@@ -108,7 +108,9 @@ struct EffectTest {
 struct EffectVerdict {
   EffectKind kind = nullptr;
   // "selected", "confounded" (significant alone, but indistinguishable from a selected effect),
-  // "not significant", or "unavailable" (a flight lacks an input it needs: `note` says which).
+  // "implausible" (significant, but only with a value outside its physical range: it absorbs something
+  // else, and is never selected; `implausible` says which value and range), "not significant", or
+  // "unavailable" (a flight lacks an input it needs: `note` says which).
   std::string status;
   bool selected = false;
   bool significant = false;
@@ -133,6 +135,8 @@ struct EffectVerdict {
   std::string note;  // one line for people
   // A selected effect whose final fit ended on a bound: which value, which bound (also in `note`).
   std::string bound_note;
+  // Status "implausible": which value lies outside which physical range (also in `note`).
+  std::string implausible;
 };
 
 struct ConfoundedEffects {

@@ -13,6 +13,7 @@
 //     library calls them through the virtual hooks of its stage below.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -126,6 +127,22 @@ struct SimulatorLimit {
   double low = 0.0, high = 0.0;
 };
 
+// The vehicle size a physical range scales with.
+enum class PlausibleScale {
+  kNone,            // the range is in SI as written
+  kArmLength,       // times the rotors' mean distance from the z axis (m)
+  kMassArmSquared,  // times mass x that arm length squared (kg m^2), the size of the body's inertia
+};
+// What the physics allows an estimate to be (MODEL.md 8), apart from the refinement's bounds, which
+// only keep the solver finite: an estimate beyond it absorbs something else (an IMU lever arm of
+// 30 cm standing in for a first moment, thrust scales of +-30 % for a geometry error).
+struct PlausibleRange {
+  bool per_coordinate = true;               // [low, high] per coordinate, else the norm <= high
+  double low = -HUGE_VAL, high = HUGE_VAL;  // SI, times the vehicle's scale
+  PlausibleScale scale = PlausibleScale::kNone;
+  std::string why;  // the physics, for the note: "an IMU sits on the frame, within an arm of O_d"
+};
+
 class EffectDescriptor {
  public:
   struct Info {
@@ -135,7 +152,7 @@ class EffectDescriptor {
     // Names of the scalar parameters when each has its own (rotor_drag's two coefficients); else
     // parameter_name with axis ("_x") or rotor ("_1") suffixes.
     std::vector<std::string> labels;
-    std::string meaning;         // one line: the model and its sign convention
+    std::string meaning;  // one line: the model and its sign convention
     EffectStage stage = EffectStage::kImuSensor;
     // Place in the chain of its stage, from the physics (0) towards the log: the simulator applies
     // the stage's effects in increasing order, the model's correction in decreasing order.
@@ -153,6 +170,7 @@ class EffectDescriptor {
     std::vector<double> screening_grid;
     DrawRange draw;
     SimulatorLimit simulator_limit;
+    PlausibleRange plausible;
     // Change between refinement passes below which it has settled when no std is computed: a
     // hundredth of the smallest sizes a 90 s flight reveals (refinement study).
     double settle_tolerance = 0.0;
@@ -186,6 +204,9 @@ class EffectDescriptor {
   int index() const { return index_; }
   // Number of scalar parameters for this vehicle.
   virtual int Dimension(const Vehicle& vehicle) const;
+  // Parameters it adds to a model for this vehicle: Dimension less one for a zero-sum effect (the
+  // refinement pins its sum).
+  int FreeDimension(const Vehicle& vehicle) const { return Dimension(vehicle) - (info_.zero_sum ? 1 : 0); }
   // Dimension without a vehicle, or -1 when it depends on one.
   virtual int FixedDimension() const { return info_.per_rotor ? -1 : info_.dimension; }
   // Labels of the scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.
@@ -197,6 +218,9 @@ class EffectDescriptor {
   // Empty when a flight with these inputs can carry the effect, else why it is unavailable
   // ("needs the velocity (motion capture or velocity columns), which this log lacks").
   std::string Unavailable(const FlightInputs& available) const;
+  // Empty when an estimate (value +- std_dev, std_dev may be empty) is within the physical range for
+  // this vehicle, allowing 3 std beyond it; else which value lies outside which range, and why.
+  std::string Implausible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev, const Vehicle& vehicle) const;
   // Clamps a value into the physical bounds.
   Eigen::VectorXd Clamp(const Eigen::VectorXd& value) const;
 
@@ -208,8 +232,10 @@ class EffectDescriptor {
   virtual void ApplyToSensor(const double* p, ImuSample<double>* sample) const;
 
   // kRotorWrench: adds the effect's terms at one sample, for the model and the simulator alike.
-  virtual void AddRotorWrench(const double* p, const RotorSample<double>& sample, RotorWrenchTerms<double>* terms) const;
-  virtual void AddRotorWrench(const ImuJet* p, const RotorSample<ImuJet>& sample, RotorWrenchTerms<ImuJet>* terms) const;
+  virtual void AddRotorWrench(const double* p, const RotorSample<double>& sample,
+                              RotorWrenchTerms<double>* terms) const;
+  virtual void AddRotorWrench(const ImuJet* p, const RotorSample<ImuJet>& sample,
+                              RotorWrenchTerms<ImuJet>* terms) const;
   virtual void AddRotorWrench(const WideImuJet* p, const RotorSample<WideImuJet>& sample,
                               RotorWrenchTerms<WideImuJet>* terms) const;
 
@@ -219,7 +245,8 @@ class EffectDescriptor {
   virtual void TransformRotorSignal(const double* p, const RotorSignalInput& input, const Eigen::VectorXd& in,
                                     Eigen::VectorXd* out) const;
   virtual void TransformRotorSignal(const RotorJet* p, const RotorSignalInput& input,
-                                    const Eigen::Matrix<RotorJet, -1, 1>& in, Eigen::Matrix<RotorJet, -1, 1>* out) const;
+                                    const Eigen::Matrix<RotorJet, -1, 1>& in,
+                                    Eigen::Matrix<RotorJet, -1, 1>* out) const;
   virtual double SimulatedCommandDelay(const Eigen::VectorXd& /*value*/) const { return 0.0; }
   // kImuSensor: the delay of the accelerometer stream behind the gyro's that the simulator applies
   // to the whole series (its per-sample ApplyToSensor leaves the sample alone).
@@ -256,8 +283,8 @@ inline const char* EffectParameterName(EffectKind kind) { return kind->parameter
 int EffectDimension(EffectKind kind);
 // Parses an effect name (either form above); throws rotorid::Error listing the valid names.
 EffectKind ParseEffectKind(const std::string& name);
-// Parses "a,b,c" effect lists ("all" for DefaultCandidates()); throws rotorid::Error on unknown
-// names.
+// Parses "a,b,c" effect lists ("all" for DefaultCandidates(), "every" for AllEffects()); throws
+// rotorid::Error on unknown names.
 std::vector<EffectKind> ParseEffectList(const std::string& list);
 
 // The value of a double or of a ceres::Jet (its .a), for decisions that carry no derivative.
@@ -275,6 +302,8 @@ class Effects {
  public:
   // The value (size EffectDimension(kind)), zeros when not set.
   Eigen::VectorXd Get(EffectKind kind) const;
+  // The value, zeros of the vehicle's dimension when not set (per-rotor effects too).
+  Eigen::VectorXd Get(EffectKind kind, const Vehicle& vehicle) const;
   // By name (either form), for tests and tools.
   Eigen::VectorXd Get(const std::string& name) const { return Get(ParseEffectKind(name)); }
   double Scalar(EffectKind kind) const { return Get(kind)[0]; }
