@@ -7,12 +7,11 @@ effect in the truth) is `ok` when nothing is selected: a false alarm otherwise.
 
     diagnosis_check.py LABEL REPORT TRUTH [SECONDS]
 """
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from effect_check import as_list, judge_effect  # noqa: E402
+from effect_check import as_list, judge_effect, read_arguments  # noqa: E402
 
 
 # A diagnosis reports an effect's coordinates under its parameter name; the truth names some apart.
@@ -38,13 +37,8 @@ def withheld_effects(truth, ranking):
 
 
 def main():
-    label, report, truth_path = sys.argv[1:4]
-    seconds = sys.argv[4] if len(sys.argv) > 4 else None
-    try:
-        d = json.load(open(report))
-        t = json.load(open(truth_path))
-    except Exception as e:
-        print(f"{label:58s} no report ({e})")
+    label, d, t, seconds = read_arguments()
+    if d is None:
         return
     ranking = d["ranking"]
     withheld = withheld_effects(t, ranking)

@@ -35,14 +35,20 @@ def judge_effect(key, value, std, want):
     return ok, parts
 
 
-def main():
+def read_arguments():
+    """(label, report, truth, seconds) from LABEL REPORT TRUTH [SECONDS]; report None if unreadable."""
     label, report, truth_path = sys.argv[1:4]
     seconds = sys.argv[4] if len(sys.argv) > 4 else None
     try:
-        r = json.load(open(report))
-        t = json.load(open(truth_path))
+        return label, json.load(open(report)), json.load(open(truth_path)), seconds
     except Exception as e:
         print(f"{label:58s} no report ({e})")
+        return label, None, None, seconds
+
+
+def main():
+    label, r, t, seconds = read_arguments()
+    if r is None:
         return
     ok, parts = True, []
     for key, entry in r["refined"]["effects"].items():
