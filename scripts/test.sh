@@ -32,8 +32,10 @@ cmake --build build/asan -j"$JOBS"
 # Three per-flight first-moment studies (several refinements each, about 150 s serial under the
 # sanitizers) run the paths FirstMomentTest.EachFlightsFirstMomentAndTheSharedParametersAreRecovered
 # and OneFlightGivesTheSameNumbersAsTheSharedFirstMoment run here; the known lever arm's study (6 s in
-# Release) the paths ImuLeverArmTest.RefinementRecoversASimulatedLeverArm runs here. Kept under 30 min.
+# Release) the paths ImuLeverArmTest.RefinementRecoversASimulatedLeverArm runs here; NanoBench's
+# diagnosis (a real flight, 4 s of CPU in Release) the selection paths DiagnosisTest runs here. Kept
+# under 30 min.
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --no-tests=error --output-on-failure -j"$JOBS" --timeout 1800 \
-  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere|DiagnosisTest\.LeverArmAbsorbingAnAccBiasIsNotSelected|FirstMomentTest\.(RefinementKeepsEachFlightsFirstMoment|ASharedFirstMomentIsBiasedOnTheSameFlights|AHeldOutFlightsFirstMomentIsFitted)|ImuLeverArmTest\.KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing)$'
+  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere|DiagnosisTest\.LeverArmAbsorbingAnAccBiasIsNotSelected|FirstMomentTest\.(RefinementKeepsEachFlightsFirstMoment|ASharedFirstMomentIsBiasedOnTheSameFlights|AHeldOutFlightsFirstMomentIsFitted)|ImuLeverArmTest\.KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing|CliWorkflowRealTest\.DiagnosisRefinesTheRivalsOfALeaderThatFailsOutOfSample)$'
 

@@ -238,6 +238,40 @@ int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fi
 
 }  // namespace
 
+namespace {
+
+// Refines `to_fit` on top of `selected` in the folds and judges them; returns the plausible candidate
+// with the smallest held-out residual (null when there is none).
+EffectKind FitAndJudge(SelectionContext* context, const AllDataModel& all_data, const std::vector<EffectKind>& to_fit,
+                       EffectMask selected, int step, bool* delay_searched, ForwardSelection* forward,
+                       ForwardStep* added, PhaseTimer* timer) {
+  const DiagnosisOptions& options = context->options;
+  const ModelRecord& base = context->records.at(selected);
+  std::vector<EffectMask> masks;
+  std::vector<std::vector<Effects>> initial;
+  for (EffectKind kind : to_fit) {
+    if (kind->stage() == EffectStage::kRotorSignal && !*delay_searched) {
+      *delay_searched = true;
+      RefineOptions search;  // the linear model, no effects, over the diagnosis' delay range
+      search.delay_search = options.delay_search;
+      search.num_threads = options.num_threads;
+      const EffectKind searched =
+          *std::find_if(AllEffects().begin(), AllEffects().end(), [](EffectKind k) { return k->info().grid_searched; });
+      forward->initial_delay_s = CoarseDelaySearch(all_data.linear, search, searched);
+      timer->Mark("coarse delay search");
+    }
+    masks.push_back(selected | Bit(kind));
+    initial.push_back(WarmStarts(kind, selected, base, forward->tested[kind].linearized_step, forward->initial_delay_s,
+                                 context->vehicle));
+  }
+  std::vector<ModelRecord> fitted = context->fitter.Fit(masks, initial);
+  timer->Mark("step " + std::to_string(step) + " fold refinements");
+  const int best = JudgeRefined(context, to_fit, base, selected, std::move(fitted), &forward->tested, &added->refined);
+  return best < 0 ? nullptr : to_fit[best];
+}
+
+}  // namespace
+
 ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& all_data, PhaseTimer* timer) {
   const DiagnosisOptions& options = context->options;
   ForwardSelection forward;
@@ -252,37 +286,22 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
         remaining.push_back(kind);
     }
     if (remaining.empty()) break;
-    const ModelRecord& base = context->records.at(selected);
-    const std::vector<EffectKind> to_fit =
-        ScreenCandidates(all_data, options, step, selected, base, remaining, &forward.tested);
+    std::vector<EffectKind> to_fit =
+        ScreenCandidates(all_data, options, step, selected, context->records.at(selected), remaining, &forward.tested);
     timer->Mark("step " + std::to_string(step) + " screening");
-    if (to_fit.empty()) break;
-
-    std::vector<EffectMask> masks;
-    std::vector<std::vector<Effects>> initial;
-    for (EffectKind kind : to_fit) {
-      if (kind->stage() == EffectStage::kRotorSignal && !delay_searched) {
-        delay_searched = true;
-        RefineOptions search;  // the linear model, no effects, over the diagnosis' delay range
-        search.delay_search = options.delay_search;
-        search.num_threads = options.num_threads;
-        const EffectKind searched = *std::find_if(AllEffects().begin(), AllEffects().end(),
-                                                  [](EffectKind k) { return k->info().grid_searched; });
-        forward.initial_delay_s = CoarseDelaySearch(all_data.linear, search, searched);
-        timer->Mark("coarse delay search");
-      }
-      masks.push_back(selected | Bit(kind));
-      initial.push_back(WarmStarts(kind, selected, base, forward.tested[kind].linearized_step, forward.initial_delay_s,
-                                   context->vehicle));
-    }
-    std::vector<ModelRecord> fitted = context->fitter.Fit(masks, initial);
-    timer->Mark("step " + std::to_string(step) + " fold refinements");
     ForwardStep added;
-    const int best = JudgeRefined(context, to_fit, base, selected, std::move(fitted), &forward.tested, &added.refined);
-    if (best < 0) break;
-    const EffectKind best_kind = to_fit[best];
+    EffectKind best_kind = nullptr;
+    // When the leaders fail out of sample (an acc bias that predicts much in sample and makes the
+    // held-out gap worse), the candidates screened out as their rivals get their turn before the
+    // selection stops.
+    while (!to_fit.empty()) {
+      best_kind = FitAndJudge(context, all_data, to_fit, selected, step, &delay_searched, &forward, &added, timer);
+      if (best_kind && forward.tested[best_kind].test.significant) break;
+      for (EffectKind kind : to_fit) remaining.erase(std::find(remaining.begin(), remaining.end(), kind));
+      to_fit = CandidatesWorthRefining(remaining, forward.tested, options);
+    }
+    if (!best_kind || !forward.tested[best_kind].test.significant) break;
     const EffectTest best_test = forward.tested[best_kind].test;
-    if (!best_test.significant) break;
     added.selection.added = best_kind;
     added.selection.before = context->records.at(selected).gap;
     selected |= Bit(best_kind);

@@ -223,6 +223,35 @@ TEST(CliWorkflowRealTest, ArplCrazyflieWindowsAndSegmentsMakeRawLogsUsable) {
     EXPECT_EQ(reasons.count(reason), 1u) << reason;
 }
 
+// On NanoBench's helix flight the acc bias predicts the most in sample and makes the held-out gap
+// worse; the forward selection must then refine rotor drag, which it had screened out as the acc
+// bias's rival, instead of stopping with nothing selected (docs/real_flights.md).
+TEST(CliWorkflowRealTest, DiagnosisRefinesTheRivalsOfALeaderThatFailsOutOfSample) {
+  const auto log = testing::SharedDataPath("real/nanobench-cf21/B5_helix_fast_rep1.csv");
+  if (!log) GTEST_SKIP() << "nanobench-cf21 absent";
+  const std::string dir = MakeTempDir("rotorid-nanobench");
+  std::ofstream(dir + "/map.yaml")
+      << "time: {column: t, unit: s}\n"
+         "gyro: {columns: [imu_gyro_x, imu_gyro_y, imu_gyro_z], unit: rad/s}\n"
+         "acc: {columns: [imu_acc_x, imu_acc_y, imu_acc_z], unit: g}\n"
+         "rotors: {columns: [motor_motor_m1, motor_motor_m2, motor_motor_m3, motor_motor_m4], unit: pwm}\n"
+         "position: {columns: [px, py, pz], unit: m}\n"
+         "quaternion: {columns: [qw, qx, qy, qz]}\n";
+  const auto run =
+      RunRotorid({"diagnose", "-q", "--vehicle", testing::SourceDir() + "/data/vehicles/crazyflie21_brushed.yaml",
+                  "--log", *log, "--column-map", dir + "/map.yaml", "--allow-partial", "--effects",
+                  "acc_bias,rotor_drag", "--max-effects", "1", "--json", dir + "/d.json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = LoadJson(dir + "/d.json");
+  ASSERT_EQ(report["selected"].size(), 1u);
+  EXPECT_EQ(report["selected"][0], "rotor_drag");
+  for (const auto& entry : report["ranking"]) {
+    if (entry["effect"] == "acc_bias") {
+      EXPECT_LT(entry["shrink_pct"].get<double>(), 0.0);  // it failed out of sample
+    }
+  }
+}
+
 // A ULog read through its motor commands says so (a truncated log without esc_rpm falls back to
 // them in "auto").
 TEST(CliWorkflowRealTest, UlogCommandSignalIsNamed) {
