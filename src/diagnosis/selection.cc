@@ -236,10 +236,6 @@ int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fi
   return best;
 }
 
-}  // namespace
-
-namespace {
-
 // Refines `to_fit` on top of `selected` in the folds and judges them; returns the plausible candidate
 // with the smallest held-out residual (null when there is none).
 EffectKind FitAndJudge(SelectionContext* context, const AllDataModel& all_data, const std::vector<EffectKind>& to_fit,
@@ -294,13 +290,13 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
     // When the leaders fail out of sample (an acc bias that predicts much in sample and makes the
     // held-out gap worse), the candidates screened out as their rivals get their turn before the
     // selection stops.
-    while (!to_fit.empty()) {
+    while (!best_kind && !to_fit.empty()) {
       best_kind = FitAndJudge(context, all_data, to_fit, selected, step, &delay_searched, &forward, &added, timer);
-      if (best_kind && forward.tested[best_kind].test.significant) break;
+      if (best_kind && !forward.tested[best_kind].test.significant) best_kind = nullptr;
       for (EffectKind kind : to_fit) remaining.erase(std::find(remaining.begin(), remaining.end(), kind));
       to_fit = CandidatesWorthRefining(remaining, forward.tested, options);
     }
-    if (!best_kind || !forward.tested[best_kind].test.significant) break;
+    if (!best_kind) break;
     const EffectTest best_test = forward.tested[best_kind].test;
     added.selection.added = best_kind;
     added.selection.before = context->records.at(selected).gap;
