@@ -51,7 +51,7 @@ def main():
             continue
         for key, m in entry["magnitude"].items():
             if entry["effect"] in withheld:
-                good, text = judge_effect(key, m["value"], m["std"], truth_of(t, key))
+                good, text = judge_effect(key, m["value"], m["std"], truth_of(t, key), m.get("held"))
                 magnitudes_ok = magnitudes_ok and good
                 parts += text
             else:

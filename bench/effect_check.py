@@ -21,12 +21,24 @@ def as_list(x):
     return x if isinstance(x, list) else [x]
 
 
-def judge_effect(key, value, std, want):
-    """(all coordinates within tolerance, text per coordinate) of one effect parameter."""
+def held_indices(key, held_labels):
+    """Coordinates that rotorid held at the vehicle file's value (report key `held`): not estimates."""
+    suffixes = ["_x", "_y", "_z"]
+    return {a for a in range(64) for label in held_labels or []
+            if label in (key + "_" + str(a + 1), key + (suffixes[a] if a < 3 else ""))}
+
+
+def judge_effect(key, value, std, want, held_labels=None):
+    """(all coordinates within tolerance, text per coordinate) of one effect parameter; held
+    coordinates are shown and not judged (rotorid says it cannot estimate them)."""
     vs, ss, ws = as_list(value), as_list(std), as_list(want)
     kind, size = TOL.get(key, ("rel", 0.10))
+    held = held_indices(key, held_labels)
     ok, parts = True, []
     for a, (x, sd, w) in enumerate(zip(vs, ss, ws)):
+        if a in held:
+            parts.append(f"{key}_{a + 1} {w:.4g} -> {x:.4g} held")
+            continue
         sd = float(sd) if sd is not None else float("nan")
         err = abs(x - w)
         good = err <= (size * abs(w) if kind == "rel" else size) or (kind == "arm" and err <= 3 * sd)
@@ -53,7 +65,7 @@ def main():
     ok, parts = True, []
     for key, entry in r["refined"]["effects"].items():
         if entry.get("enabled"):
-            good, text = judge_effect(key, entry["value"], entry["std"], t["effects"].get(key))
+            good, text = judge_effect(key, entry["value"], entry["std"], t["effects"].get(key), entry.get("held"))
             ok, parts = ok and good, parts + text
     tail = ""
     kt_true = t.get("parameters", {}).get("kt")

@@ -10,4 +10,10 @@ std::string FormatValue(const char* printf_format, double value) {
   return buffer;
 }
 
+std::string Join(const std::vector<std::string>& parts, const char* separator) {
+  std::string out;
+  for (const std::string& part : parts) out += (out.empty() ? "" : separator) + part;
+  return out;
+}
+
 }  // namespace rotorid

@@ -209,12 +209,16 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
   const Eigen::Index e = static_cast<Eigen::Index>(fit.labels.size());
   // A zero-sum effect (per-rotor thrust scales) moves within sum = 0, as the refinement pins it: its
   // columns are projected onto that subspace (their sum is kt's and kd's columns), and so are its
-  // step and covariance (the pseudo-inverse's part along the all-ones direction is arbitrary).
+  // step and covariance (the pseudo-inverse's part along the all-ones direction is arbitrary). A held
+  // coordinate (an IMU lever arm's z) does not move at all: its column is projected out.
   Eigen::MatrixXd projector = Eigen::MatrixXd::Identity(p + e, p + e);
   for (Eigen::Index c = 0; c < e;) {
     Eigen::Index end = c;
     while (end < e && fit.column_kind[end] == fit.column_kind[c]) ++end;
-    if (fit.column_kind[c]->info().zero_sum) projector.block(p + c, p + c, end - c, end - c).array() -= 1.0 / (end - c);
+    const EffectKind kind = fit.column_kind[c];
+    if (kind->info().zero_sum) projector.block(p + c, p + c, end - c, end - c).array() -= 1.0 / (end - c);
+    for (int k : kind->info().held_coordinates)
+      if (c + k < end) projector(p + c + k, p + c + k) = 0.0;
     c = end;
   }
   const Eigen::MatrixXd gram = projector * linearization.gram(all, all) * projector;

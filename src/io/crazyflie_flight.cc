@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/model/rotation.h"
@@ -32,12 +33,6 @@ struct Lookup {
   }
   bool complete() const { return missing.empty(); }
 };
-
-std::string Join(const std::vector<std::string>& names, const char* separator = ", ") {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : separator) + n;
-  return out;
-}
 
 std::string LoggedVariables(const UsdEventTable& event) {
   std::vector<std::string> names;

@@ -52,7 +52,14 @@ const EffectDescriptor& ImuLeverArmEffect() {
     i.display_scale = 1e3;
     i.display_unit = "mm";
     // r_z is ms_z / m in the force rows and ms_z is nearly absent from the moment rows (the specific
-    // force is along z): refined and screened only when named (--effects ...,imu_lever_arm).
+    // force is along z): estimated, r_z takes ms_z's place (2-4 mm on every simulated Crazyflie flight
+    // without a lever arm, +-300 mm on its bound with ms_z free), so it is held at the vehicle file's
+    // value. Refined and screened only when named (--effects ...,imu_lever_arm).
+    i.held_coordinates = {2};
+    i.held_why =
+        "the force rows see only ms_z - m r_z and the moment rows fix ms_z only through horizontal specific force, "
+        "which a multirotor barely has: r_z is held at the vehicle file's imu_position (measure the IMU's height "
+        "above O_d), and ms_z carries what is left";
     i.default_candidate = false;
     // A lever arm measured on the vehicle (vehicle file `imu_position: [x, y, z]`) is corrected in
     // processing; the effect then estimates what is left of it.

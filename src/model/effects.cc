@@ -85,12 +85,20 @@ std::vector<std::string> EffectDescriptor::Labels(int dimension) const {
   return labels;
 }
 
+bool EffectDescriptor::Held(int coordinate) const {
+  return std::find(info_.held_coordinates.begin(), info_.held_coordinates.end(), coordinate) !=
+         info_.held_coordinates.end();
+}
+
 std::string EffectDescriptor::Format(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const {
   const double unit = info_.display_scale;
   std::ostringstream out;
   auto entry = [&](Eigen::Index k) {
     out << std::setprecision(3) << value[k] * unit;
-    if (k < std_dev.size()) out << " +- " << std::setprecision(2) << std_dev[k] * unit;
+    if (Held(static_cast<int>(k)))
+      out << " held";
+    else if (k < std_dev.size())
+      out << " +- " << std::setprecision(2) << std_dev[k] * unit;
   };
   if (value.size() == 1) {
     entry(0);

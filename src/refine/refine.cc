@@ -213,26 +213,57 @@ std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(ceres::Problem* proble
   return found;
 }
 
-// Pins the sum of a zero-sum effect's values: their mean is a linear parameter's (a common thrust
-// factor is kt's), so the rows cannot fix it and only the TLS normalisation pulls on it, weakly;
-// 100 x the square root of the row count outweighs that pull (sums below 1e-6 on the flights
-// tested) and keeps the problem well conditioned.
-class ZeroSumResidual : public ceres::CostFunction {
+// Pins linear combinations of an effect block's values to targets, A x - b with the weights in A
+// and b: the sum of a zero-sum effect's values and the coordinates an effect holds. A penalty rather
+// than a manifold keeps every block's tangent space its ambient one, which the covariance and
+// Jacobian code below assume.
+class PinResidual : public ceres::CostFunction {
  public:
-  ZeroSumResidual(int size, double weight) : weight_(weight) {
-    set_num_residuals(1);
-    mutable_parameter_block_sizes()->push_back(size);
+  PinResidual(Eigen::MatrixXd weighted_combinations, Eigen::VectorXd weighted_targets)
+      : combinations_(std::move(weighted_combinations)), targets_(std::move(weighted_targets)) {
+    set_num_residuals(static_cast<int>(combinations_.rows()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(combinations_.cols()));
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const int size = parameter_block_sizes()[0];
-    residuals[0] = weight_ * Eigen::Map<const Eigen::VectorXd>(parameters[0], size).sum();
-    if (jacobians && jacobians[0]) std::fill(jacobians[0], jacobians[0] + size, weight_);
+    const Eigen::Map<const Eigen::VectorXd> x(parameters[0], combinations_.cols());
+    Eigen::Map<Eigen::VectorXd>(residuals, combinations_.rows()) = combinations_ * x - targets_;
+    if (jacobians && jacobians[0])
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+          jacobians[0], combinations_.rows(), combinations_.cols()) = combinations_;
     return true;
   }
 
  private:
-  double weight_;
+  Eigen::MatrixXd combinations_;
+  Eigen::VectorXd targets_;
 };
+
+// The pins of one effect block (in its solver units, started at `start`; `rows` residual rows in the
+// problem), or null when it has none.
+// - A zero-sum effect's sum: the mean is a linear parameter's (a common thrust factor is kt's), so
+//   the rows cannot fix it and only the TLS normalisation pulls on it, weakly; 100 x sqrt(rows)
+//   outweighs that pull (sums below 1e-6 on the flights tested) and keeps the problem well
+//   conditioned.
+// - Each held coordinate at its start value: the rows pull on it hard (the lever arm's z is ms_z's
+//   column), and the drift falls with the weight squared: 100 x sqrt(rows) left 0.06 mm of an IMU
+//   lever arm's z on configuration B, 1e4 x sqrt(rows) leaves 1e-5 of that.
+PinResidual* EffectPins(EffectKind kind, const Eigen::VectorXd& start, double rows) {
+  const Eigen::Index size = start.size();
+  const std::vector<int>& held = kind->info().held_coordinates;
+  const Eigen::Index pins = (kind->info().zero_sum ? 1 : 0) + static_cast<Eigen::Index>(held.size());
+  if (pins == 0 || size == 0) return nullptr;
+  Eigen::MatrixXd combinations = Eigen::MatrixXd::Zero(pins, size);
+  Eigen::VectorXd targets = Eigen::VectorXd::Zero(pins);
+  Eigen::Index pin = 0;
+  if (kind->info().zero_sum) combinations.row(pin++).setConstant(100.0 * std::sqrt(rows));
+  for (int k : held) {
+    CHECK_LT(k, size) << kind->name() << ": held coordinate out of range";
+    const double weight = 1e4 * std::sqrt(rows);
+    combinations(pin, k) = weight;
+    targets[pin++] = weight * start[k];
+  }
+  return new PinResidual(std::move(combinations), std::move(targets));
+}
 
 // The unit a free effect's parameter block is in: effects whose realistic size is far below 1
 // (coefficients of 1e-5) are solved in units of that size, so that their Jacobian columns are
@@ -323,7 +354,7 @@ void AddRowResiduals(const IdentificationResult& linear, const TlsSolution& tls,
 }
 
 // Discarded (non-essential) parameters stay at zero, as in the TLS step; effects within their
-// bounds; a zero-sum effect's sum pinned.
+// bounds; a zero-sum effect's sum and the held coordinates pinned.
 void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
   const int p = ep->context.num_parameters;
   if (ep->free.empty()) {
@@ -338,10 +369,8 @@ void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
       ep->problem->SetParameterLowerBound(values, static_cast<int>(a), lower / ep->effect_blocks.Scale(b));
       ep->problem->SetParameterUpperBound(values, static_cast<int>(a), upper / ep->effect_blocks.Scale(b));
     }
-    if (ep->effect_blocks.free[b]->info().zero_sum)
-      ep->problem->AddResidualBlock(
-          new ZeroSumResidual(static_cast<int>(ep->effect_values[b].size()), 100.0 * std::sqrt(ep->context.total_rows)),
-          nullptr, values);
+    if (PinResidual* pins = EffectPins(ep->effect_blocks.free[b], ep->effect_values[b], ep->context.total_rows))
+      ep->problem->AddResidualBlock(pins, nullptr, values);
   }
 }
 
@@ -435,8 +464,7 @@ void ComputeRefinedCovariance(EffectProblem* ep, const IdimSystem& system, doubl
   if (!covariance.Compute(pairs, ep->problem.get())) {
     result->rank_deficient = true;
     result->confounded = NullSpaceParameters(ep->problem.get(), blocks, system, ep->free, effect_labels);
-    std::string names;
-    for (const std::string& n : result->confounded) names += (names.empty() ? "" : ", ") + n;
+    const std::string names = Join(result->confounded);
     result->warnings.push_back(
         "the refined parameters are not jointly identifiable from these flights (rank-deficient "
         "Jacobian); confounded: " +
@@ -464,9 +492,10 @@ void ComputeRefinedCovariance(EffectProblem* ep, const IdimSystem& system, doubl
   int e = 0;
   for (size_t b = 0; b < ep->effect_blocks.free.size(); ++b) {
     const Eigen::Index size = ep->effect_values[b].size();
-    result->effects_std.Set(
-        ep->effect_blocks.free[b],
-        ep->effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt());
+    Eigen::VectorXd std_dev =
+        ep->effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt();
+    for (int k : ep->effect_blocks.free[b]->info().held_coordinates) std_dev[k] = 0.0;  // not estimated
+    result->effects_std.Set(ep->effect_blocks.free[b], std_dev);
     e += static_cast<int>(size);
   }
   result->effect_labels = effect_labels;

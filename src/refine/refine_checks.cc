@@ -1,6 +1,7 @@
 #include "rotorid/refine/refine_checks.h"
 
 #include <cmath>
+#include "rotorid/core/text.h"
 
 namespace rotorid {
 namespace {
@@ -45,8 +46,7 @@ std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, co
   if (!refined.has_covariance) parameters.std.clear();
   std::vector<Check> checks = CheckParameters(parameters, linear.system.config_names, label);
   if (refined.rank_deficient) {
-    std::string names;
-    for (const std::string& n : refined.confounded) names += (names.empty() ? "" : ", ") + n;
+    const std::string names = Join(refined.confounded);
     checks.push_back({"refined_identifiable", CheckStatus::kWarning,
                       label + ": the refined parameters are not jointly identifiable (confounded: " + names +
                           "), so no std is reported; refine fewer effects (rotorid ablate compares subsets)"});

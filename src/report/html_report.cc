@@ -17,6 +17,7 @@
 #include "report/report_figures.h"
 #include "report/spectrum.h"
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/report/input_json.h"
@@ -704,6 +705,8 @@ std::string ReportBuilder::EffectsTable() const {
             (e.enabled ? (e.on_bound ? "<span class=\"tag warn\">on its bound</span>"
                                      : "<span class=\"tag yes\">estimated</span>")
                        : "<span class=\"tag nope\">not estimated</span>") +
+            (e.enabled && !e.held.empty() ? " <span class=\"tag nope\">" + Html(Join(e.held, ", ")) + " held</span>"
+                                          : std::string()) +
             "</td></tr>\n";
   }
   if (rows.empty()) return "";

@@ -34,9 +34,13 @@ std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& val
     if (!labels.empty()) {  // one entry per coefficient, as INTERFACE.md names them
       for (size_t k = 0; k < labels.size(); ++k)
         out.push_back({labels[k], Eigen::VectorXd::Constant(1, at(v, k)), Eigen::VectorXd::Constant(1, at(s, k)),
-                       true, on, bounded});
+                       true, on, bounded, {}});
     } else {
-      out.push_back({EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded});
+      EffectParameterEstimate estimate{EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded, {}};
+      const std::vector<std::string> coordinate_labels = kind->Labels(static_cast<int>(v.size()));
+      for (int k : kind->info().held_coordinates)
+        if (k < v.size()) estimate.held.push_back(coordinate_labels[static_cast<size_t>(k)]);
+      out.push_back(std::move(estimate));
     }
   }
   return out;
@@ -45,11 +49,13 @@ std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& val
 nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const std::vector<EffectKind>& enabled,
                            const std::vector<EffectKind>& on_bound) {
   nlohmann::json out = nlohmann::json::object();
-  for (const EffectParameterEstimate& e : EffectParameterEstimates(value, std_dev, enabled, on_bound))
+  for (const EffectParameterEstimate& e : EffectParameterEstimates(value, std_dev, enabled, on_bound)) {
     out[e.name] = {{"value", e.scalar ? JsonNumber(e.value[0]) : VectorJson(e.value)},
                    {"std", e.scalar ? JsonNumber(e.std[0]) : VectorJson(e.std)},
                    {"enabled", e.enabled},
                    {"on_bound", e.on_bound}};
+    if (!e.held.empty()) out[e.name]["held"] = e.held;
+  }
   return out;
 }
 

@@ -200,9 +200,9 @@ TEST(DiagnosisTest, ThrustScalesOfTensOfPercentAreImplausibleAndNotSelected) {
 }
 
 // An IMU lever arm standing in for part of an accelerometer bias (issue 10: r_z ran to its 300 mm
-// bound and was selected second) lies beyond the frame: not selected. Its fold fits are plausible
-// (z 9 mm); only the fit on all data runs off, so this is the test of the final model's check. 6 s in
-// Release (on 30 s, or with 2 folds, the lever arm does not run off): Release only (scripts/test.sh).
+// bound and was selected second; then dropped by the final model's plausibility check) is not
+// selected: its z is now held at the vehicle file's value, and what is left (x, y) explains nothing
+// the bias does not. Release only (scripts/test.sh).
 TEST(DiagnosisTest, LeverArmAbsorbingAnAccBiasIsNotSelected) {
   Effects withheld;
   withheld.Set("acc_bias", Eigen::Vector3d(0.3, -0.2, 0.25));
@@ -212,9 +212,31 @@ TEST(DiagnosisTest, LeverArmAbsorbingAnAccBiasIsNotSelected) {
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 22, withheld)}, {}, options);
   EXPECT_EQ(d.selected, std::vector<EffectKind>{ParseEffectKind("acc_bias")}) << DiagnosisVerdict(d);
   const EffectVerdict& v = VerdictOf(d, lever_arm);
-  EXPECT_EQ(v.status, "implausible") << DiagnosisVerdict(d);
-  EXPECT_NE(v.note.find("is outside its physical range (norm <= 225 mm): the IMU sits on the frame"), std::string::npos)
-      << v.note;
+  EXPECT_EQ(v.status, "not significant") << DiagnosisVerdict(d);
+  EXPECT_EQ(v.value[2], 0.0) << "r_z is held";
+}
+
+// On a Crazyflie-like flight (CF preset, 40 s at 500 Hz) whose accelerometer lags by 4 ms and
+// whose IMU sits at O_d, the lever arm's z took the place of the first moment ms_z (CF's centre of
+// mass is 2 mm below O_d): r_z = 2.16 +- 0.11 mm, held-out shrink 3.6 %, selected second. Held at
+// the vehicle file's value, what is left of the lever arm (x, y) explains nothing. Release only
+// (scripts/test.sh): 500 Hz flights are slow under the sanitizers.
+TEST(DiagnosisTest, LeverArmDoesNotTakeTheFirstMomentsPlaceAlongZ) {
+  Effects withheld;
+  withheld.Set("acc_delay_s", 0.004);
+  const SimulationResult sim = testing::SimulatePreset("CF", 40.0, 1, withheld);
+  const ProcessedFlight flight = ProcessFlights({{sim.vehicle, sim.log, 1.0}}, ObservationOptions{}).front();
+  DiagnosisOptions options;
+  const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
+  options.candidates = {ParseEffectKind("acc_delay"), lever_arm};
+  const Diagnosis d = Diagnose({flight}, {}, options);
+  EXPECT_EQ(d.selected, std::vector<EffectKind>{ParseEffectKind("acc_delay")}) << DiagnosisVerdict(d);
+  EXPECT_NEAR(VerdictOf(d, ParseEffectKind("acc_delay")).value[0], 0.004, 1e-3);
+  const EffectVerdict& v = VerdictOf(d, lever_arm);
+  EXPECT_FALSE(v.significant) << DiagnosisVerdict(d);
+  // It still says what it would reveal, in x and y only.
+  ASSERT_EQ(v.detectable_above.size(), 3);
+  EXPECT_GT(v.detectable_above[0], 0.0);
 }
 
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {

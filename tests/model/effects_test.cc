@@ -96,10 +96,10 @@ TEST(EffectsTest, PhysicalRangesScaleWithTheVehicleAndAllowThreeStd) {
   }
   // The lever arm is bounded by the arm length: 0.225 m on B, 0.046 m on the Crazyflie.
   const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
-  const Eigen::Vector3d arm(0.0, 0.0, -0.1);
+  const Eigen::Vector3d arm(-0.1, 0.0, 0.0);
   EXPECT_EQ(lever_arm->Implausible(arm, {}, b.vehicle), "");
   const std::string why = lever_arm->Implausible(arm, {}, cf.vehicle);
-  EXPECT_NE(why.find("imu_position_m = (0, 0, -100) mm (norm 100 mm) is outside its physical range (norm <= 46 mm)"),
+  EXPECT_NE(why.find("imu_position_m = (-100, 0, 0 held) mm (norm 100 mm) is outside its physical range (norm <= 46 mm)"),
             std::string::npos)
       << why;
   // 3 std of slack: 0.2 +- 0.04 is within 3 std of 0.1, 0.2 +- 0.03 is not.

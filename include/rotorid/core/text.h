@@ -1,8 +1,9 @@
 #pragma once
 
-// Numbers in messages and reports.
+// Numbers and lists in messages and reports.
 
 #include <string>
+#include <vector>
 
 namespace rotorid {
 
@@ -10,5 +11,7 @@ namespace rotorid {
 std::string FormatValue(const char* printf_format, double value);
 // Three significant digits, as messages quote measured values.
 inline std::string ShortNumber(double value) { return FormatValue("%.3g", value); }
+// "a, b, c".
+std::string Join(const std::vector<std::string>& parts, const char* separator = ", ");
 
 }  // namespace rotorid

@@ -182,6 +182,12 @@ class EffectDescriptor {
     // The values sum to zero (a per-rotor spread around a mean that a linear parameter already
     // carries): the refinement pins the sum, and the simulator's draws are centred.
     bool zero_sum = false;
+    // Coordinates the refinement and the diagnosis hold at their start value (the vehicle file's
+    // known value, else 0) because a parameter of the linear model has the same columns in every
+    // row these flights give (an IMU lever arm along z is the first moment ms_z), and why: estimated,
+    // such a coordinate only takes that parameter's place (MODEL.md 8).
+    std::vector<int> held_coordinates;
+    std::string held_why;
     // Whether "all" (refine's and ablate's default, the diagnosis's candidates) includes it: false
     // for an effect that a parameter of the linear model mimics so closely that, on ordinary
     // flights, it runs to its bound or takes that parameter's value (used when named).
@@ -205,8 +211,11 @@ class EffectDescriptor {
   // Number of scalar parameters for this vehicle.
   virtual int Dimension(const Vehicle& vehicle) const;
   // Parameters it adds to a model for this vehicle: Dimension less one for a zero-sum effect (the
-  // refinement pins its sum).
-  int FreeDimension(const Vehicle& vehicle) const { return Dimension(vehicle) - (info_.zero_sum ? 1 : 0); }
+  // refinement pins its sum) and less its held coordinates.
+  int FreeDimension(const Vehicle& vehicle) const {
+    return Dimension(vehicle) - (info_.zero_sum ? 1 : 0) - static_cast<int>(info_.held_coordinates.size());
+  }
+  bool Held(int coordinate) const;
   // Dimension without a vehicle, or -1 when it depends on one.
   virtual int FixedDimension() const { return info_.per_rotor ? -1 : info_.dimension; }
   // Labels of the scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.

@@ -26,6 +26,7 @@ struct EffectParameterEstimate {
   bool scalar = true;  // written as a number, else as an array
   bool enabled = false;
   bool on_bound = false;
+  std::vector<std::string> held;  // coordinates held at the vehicle file's value, not estimated
 };
 // Every effect parameter of the registry, in its order.
 std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& value, const Effects& std_dev,
