@@ -28,18 +28,18 @@ std::string TlsOptions::Validate() const {
   return {};
 }
 
-int IdimSystem::Column(const std::string& name) const {
+int IdimLayout::Column(const std::string& name) const {
   const auto it = std::find(parameter_names.begin(), parameter_names.end(), name);
   return it == parameter_names.end() ? -1 : static_cast<int>(it - parameter_names.begin());
 }
 
-int IdimSystem::SystemColumn(int f, int k) const {
+int IdimLayout::SystemColumn(int f, int k) const {
   if (k < kNumRotorCoefficients) return k;
   if (k < kNumRotorCoefficients + kNumBodyParameters) return flight_body_columns[f][k - kNumRotorCoefficients];
   return num_parameters();
 }
 
-void IdimSystem::PlaceFlightRows(int f, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const {
+void IdimLayout::PlaceFlightRows(int f, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const {
   for (int k = 0; k < kNumIdimColumns; ++k) w->block(first_row, SystemColumn(f, k), wf.rows(), 1) = wf.col(k);
 }
 
@@ -455,20 +455,27 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
 
 }  // namespace
 
-double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution) {
-  const int p = static_cast<int>(solution.chi.size());
+std::vector<int> CriterionColumns(const TlsSolution& solution) {
   std::vector<int> columns;
-  for (int k = 0; k < p; ++k)
+  for (int k = 0; k < static_cast<int>(solution.chi.size()); ++k)
     if (solution.essential[k]) columns.push_back(k);
-  columns.push_back(p);
-  const Eigen::MatrixXd r = WeightedR(SelectColumns(w, columns), solution.row_weight);
-  const Eigen::MatrixXd metric = SelectBlock(solution.column_metric, columns);
+  columns.push_back(static_cast<int>(solution.chi.size()));
+  return columns;
+}
+
+double MinimumTlsCriterionOfFactor(const Eigen::MatrixXd& r, const TlsSolution& solution) {
+  const Eigen::MatrixXd metric = SelectBlock(solution.column_metric, CriterionColumns(solution));
   // Rayleigh quotient minimum = smallest generalized eigenvalue; evaluate it at its minimiser.
   double scale_entry = 0.0;
   Eigen::MatrixXd used_metric;
   const Eigen::VectorXd x = GeneralizedTls(r, metric, &scale_entry, nullptr, &used_metric);
   const double denominator = x.dot(metric * x);
   return denominator > 0.0 ? (r * x).squaredNorm() / denominator : 0.0;
+}
+
+double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution) {
+  return MinimumTlsCriterionOfFactor(WeightedR(SelectColumns(w, CriterionColumns(solution)), solution.row_weight),
+                                     solution);
 }
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {

@@ -1,6 +1,11 @@
 #include "refine/grid_search.h"
 
+#include <Eigen/QR>
+#include <algorithm>
+
 #include "refine/parallel_for.h"
+#include "rotorid/model/rigid_body.h"
+#include "rotorid/refine/effect_model.h"
 #include "rotorid/refine/refine.h"
 
 namespace rotorid::internal {
@@ -11,9 +16,113 @@ std::vector<double> SearchGrid(double min, double max, double step) {
   return grid;
 }
 
+namespace {
+
+// The criterion along the grid of a rotor-signal effect (the delay). Such an effect moves only the
+// rotor columns (kt, kd) and, when a rotor-wrench effect acts, the known column (its extra wrench
+// follows the rotor speeds); the body columns come from the IMU alone. So the weighted fixed columns
+// B are factored once, B = Q_B [R_B; 0], and per grid value only the changing columns A are:
+// [R_B, Q_B^T A; 0, R of (I - Q_B Q_B^T) A] has the Gram matrix of the weighted [B A], which is all
+// that MinimumTlsCriterionOfFactor needs (columns put back in the criterion's order). The same
+// criterion as EffectCriterion to round-off, for a QR of the changing columns per grid value
+// instead of one of all columns, and rows built once.
+class RotorSignalGrid {
+ public:
+  RotorSignalGrid(const IdentificationResult& linear, const Effects& base, EffectKind kind)
+      : linear_(linear), base_(base), kind_(kind) {
+    const TlsSolution& solution = linear.solution;
+    const int known = static_cast<int>(solution.chi.size());
+    Effects trial = base;
+    trial.Set(kind, 0.0);
+    wrench_acts_ = !ActingEffects(trial, EffectStage::kRotorWrench).kinds.empty();
+    for (int column : CriterionColumns(solution)) {
+      const bool changes = column < kNumRotorCoefficients || (wrench_acts_ && column == known);
+      (changes ? changing_ : fixed_).push_back(column);
+    }
+    sqrt_weight_ = solution.row_weight.cwiseSqrt();
+    fixed_qr_.compute(sqrt_weight_.asDiagonal() * SystemRows(trial, fixed_));
+  }
+
+  double Criterion(double value) const {
+    Effects trial = base_;
+    trial.Set(kind_, value);
+    const Eigen::Index n_fixed = static_cast<Eigen::Index>(fixed_.size());
+    const Eigen::Index n_changing = static_cast<Eigen::Index>(changing_.size());
+    Eigen::MatrixXd changing =
+        sqrt_weight_.asDiagonal() * (wrench_acts_ ? SystemRows(trial, changing_) : RotorColumns(trial));
+    changing.applyOnTheLeft(fixed_qr_.householderQ().adjoint());
+    const Eigen::HouseholderQR<Eigen::MatrixXd> rest(changing.bottomRows(changing.rows() - n_fixed));
+    // The factor in the order [fixed, changing], then its columns back in the criterion's order.
+    Eigen::MatrixXd factor = Eigen::MatrixXd::Zero(n_fixed + n_changing, n_fixed + n_changing);
+    factor.topLeftCorner(n_fixed, n_fixed) = fixed_qr_.matrixQR().topRows(n_fixed).triangularView<Eigen::Upper>();
+    factor.topRightCorner(n_fixed, n_changing) = changing.topRows(n_fixed);
+    factor.bottomRightCorner(n_changing, n_changing) =
+        rest.matrixQR().topRows(n_changing).triangularView<Eigen::Upper>();
+    const std::vector<int> columns = CriterionColumns(linear_.solution);
+    Eigen::MatrixXd ordered(factor.rows(), factor.cols());
+    for (Eigen::Index k = 0; k < factor.cols(); ++k) {
+      const int column = k < n_fixed ? fixed_[static_cast<size_t>(k)] : changing_[static_cast<size_t>(k - n_fixed)];
+      ordered.col(std::find(columns.begin(), columns.end(), column) - columns.begin()) = factor.col(k);
+    }
+    return MinimumTlsCriterionOfFactor(ordered, linear_.solution);
+  }
+
+ private:
+  // The system's `columns` of every flight's rows with `effects`.
+  Eigen::MatrixXd SystemRows(const Effects& effects, const std::vector<int>& columns) const {
+    const IdimSystem& system = linear_.system;
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(system.w.rows(), static_cast<Eigen::Index>(columns.size()));
+    Eigen::Index row = 0;
+    for (int f = 0; f < system.num_flights(); ++f) {
+      const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear_.flights[f], effects);
+      for (Eigen::Index k = 0; k < wf.cols(); ++k) {
+        const auto at = std::find(columns.begin(), columns.end(), system.SystemColumn(f, static_cast<int>(k)));
+        if (at != columns.end()) out.col(at - columns.begin()).segment(row, wf.rows()) = wf.col(k);
+      }
+      row += wf.rows();
+    }
+    return out;
+  }
+
+  // The changing columns without a rotor-wrench effect: the rotor columns (kt, kd) of every flight's
+  // rows with `effects`, -D_k at the effective rotor speeds as IdimRows writes them, without the
+  // body columns that IMU-only work would build for nothing.
+  Eigen::MatrixXd RotorColumns(const Effects& effects) const {
+    Eigen::MatrixXd out(linear_.system.w.rows(), static_cast<Eigen::Index>(changing_.size()));
+    Eigen::Index row = 0;
+    for (const ProcessedFlight& flight : linear_.flights) {
+      const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
+      for (int r = 0; r < flight.num_rows_samples(); ++r, row += 6) {
+        const Eigen::VectorXd speed = rotor.speed.row(r).transpose();
+        const Eigen::Matrix<double, 6, kNumRotorCoefficients> columns = -RotorRegressor<double>(speed, flight.vehicle);
+        for (size_t k = 0; k < changing_.size(); ++k)
+          out.block<6, 1>(row, static_cast<Eigen::Index>(k)) = columns.col(changing_[k]);
+      }
+    }
+    return out;
+  }
+
+  const IdentificationResult& linear_;
+  const Effects& base_;
+  EffectKind kind_;
+  bool wrench_acts_ = false;
+  std::vector<int> fixed_, changing_;  // criterion columns; changing_ are rotor columns, then the known one
+  Eigen::VectorXd sqrt_weight_;
+  Eigen::HouseholderQR<Eigen::MatrixXd> fixed_qr_;
+};
+
+}  // namespace
+
 std::vector<double> CriterionOverGrid(const IdentificationResult& linear, const Effects& base, EffectKind kind,
                                       const std::vector<double>& grid, int threads) {
   std::vector<double> criterion(grid.size(), 0.0);
+  if (kind->stage() == EffectStage::kRotorSignal) {
+    const RotorSignalGrid rotor_grid(linear, base, kind);
+    ParallelFor(static_cast<int>(grid.size()), threads, [&](int i) {
+      criterion[static_cast<size_t>(i)] = rotor_grid.Criterion(grid[static_cast<size_t>(i)]);
+    });
+    return criterion;
+  }
   ParallelFor(static_cast<int>(grid.size()), threads, [&](int i) {
     Effects trial = base;
     trial.Set(kind, grid[static_cast<size_t>(i)]);

@@ -127,33 +127,53 @@ double ComponentAutocorrelationFactor(const Eigen::VectorXd& residuals) {
 
 namespace {
 
-// The problem's Jacobian with respect to `blocks`, dense. Ceres returns it in tangent coordinates
-// (chi's SubsetManifold drops the fixed entries), so a block with a manifold has its tangent size
-// in columns.
-Eigen::MatrixXd DenseJacobian(ceres::Problem* problem, const std::vector<const double*>& blocks) {
+// The factor R (upper triangular, R^T R = J^T J) of the problem's Jacobian J with respect to
+// `blocks`, in tangent coordinates. J is evaluated a few residual blocks at a time, each piece folded
+// into R by a Householder QR of [R; piece], so that J itself is never held (it is rows x columns:
+// 200 MB on a 1 h log). R has J's singular values and right singular vectors and J's column norms,
+// and a least-squares fit between J's columns is the same fit between R's: all that the covariance
+// and the confounding checks below need.
+constexpr int kResidualBlocksPerJacobianPiece = 64;
+Eigen::MatrixXd JacobianFactor(ceres::Problem* problem, const std::vector<double*>& blocks,
+                               const std::vector<ceres::ResidualBlockId>& residual_blocks, int num_threads) {
   ceres::Problem::EvaluateOptions evaluate;
-  for (const double* b : blocks) evaluate.parameter_blocks.push_back(const_cast<double*>(b));
-  ceres::CRSMatrix crs;
-  problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
-  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r)
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) jac(r, crs.cols[k]) = crs.values[k];
-  return jac;
+  evaluate.parameter_blocks = blocks;
+  evaluate.num_threads = num_threads;
+  int columns = 0;
+  for (const double* b : blocks) columns += problem->ParameterBlockTangentSize(b);
+  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(columns, columns);
+  for (size_t first = 0; first < residual_blocks.size(); first += kResidualBlocksPerJacobianPiece) {
+    const size_t last = std::min(residual_blocks.size(), first + kResidualBlocksPerJacobianPiece);
+    evaluate.residual_blocks.assign(residual_blocks.begin() + static_cast<std::ptrdiff_t>(first),
+                                    residual_blocks.begin() + static_cast<std::ptrdiff_t>(last));
+    ceres::CRSMatrix crs;
+    problem->Evaluate(evaluate, nullptr, nullptr, nullptr, &crs);
+    CHECK_EQ(crs.num_cols, columns);
+    Eigen::MatrixXd stacked = Eigen::MatrixXd::Zero(columns + crs.num_rows, columns);
+    stacked.topRows(columns) = r;
+    for (int row = 0; row < crs.num_rows; ++row)
+      for (int k = crs.rows[row]; k < crs.rows[row + 1]; ++k) stacked(columns + row, crs.cols[k]) = crs.values[k];
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
+    r = qr.matrixQR().topRows(columns).triangularView<Eigen::Upper>();
+  }
+  return r;
 }
 
-// The parameters taking part in the (numerical) null space of the Jacobian, in tangent
-// coordinates with equilibrated columns: what the flights cannot tell apart.
-std::vector<std::string> NullSpaceParameters(ceres::Problem* problem, const std::vector<const double*>& blocks,
-                                             const IdimSystem& system, const std::vector<int>& free,
-                                             const std::vector<std::string>& effect_labels) {
+// The Jacobian's factor at the solution over every chi coordinate (the discarded ones too; none when
+// chi is held) and then the free effects' coordinates: one evaluation for the covariance (its free
+// columns) and the check of effects resting on discarded parameters (all of them).
+struct SolutionJacobian {
+  Eigen::MatrixXd factor;
+  int chi_columns = 0;
+};
+
+// The parameters taking part in the (numerical) null space of the Jacobian `factor` (in tangent
+// coordinates, labelled), with equilibrated columns: what the flights cannot tell apart.
+std::vector<std::string> NullSpaceParameters(const Eigen::MatrixXd& factor, const std::vector<std::string>& labels) {
   // A column scaling makes the SVD see directions, not units.
-  const Eigen::MatrixXd tangent_jac = DenseJacobian(problem, blocks);
-  std::vector<std::string> labels;
-  for (int k : free) labels.push_back(system.parameter_names[k]);
-  labels.insert(labels.end(), effect_labels.begin(), effect_labels.end());
-  CHECK_EQ(static_cast<Eigen::Index>(labels.size()), tangent_jac.cols());
-  const Eigen::VectorXd norms = tangent_jac.colwise().norm().transpose().cwiseMax(1e-300);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(tangent_jac * norms.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
+  CHECK_EQ(static_cast<Eigen::Index>(labels.size()), factor.cols());
+  const Eigen::VectorXd norms = factor.colwise().norm().transpose().cwiseMax(1e-300);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(factor * norms.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
   std::vector<std::string> names;
   for (Eigen::Index j = 0; j < sv.size(); ++j) {
@@ -177,29 +197,24 @@ struct RestingOnDiscarded {
   std::string coordinate, parameter;
   double explained = 0.0;
 };
-std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(ceres::Problem* problem, double* chi_block,
-                                                          const std::vector<double*>& effect_blocks,
-                                                          const IdimSystem& system, const std::vector<int>& fixed,
+std::vector<RestingOnDiscarded> EffectsRestingOnDiscarded(const SolutionJacobian& jacobian, const IdimLayout& system,
+                                                          const std::vector<int>& fixed,
                                                           const std::vector<std::string>& effect_labels) {
-  if (fixed.empty() || effect_blocks.empty()) return {};
+  if (fixed.empty() || effect_labels.empty()) return {};
   const int p = system.num_parameters();
-  // Every chi column, the fixed ones included: drop the subset manifold for this evaluation.
-  std::vector<const double*> blocks = {chi_block};
-  blocks.insert(blocks.end(), effect_blocks.begin(), effect_blocks.end());
-  problem->SetManifold(chi_block, nullptr);
-  const Eigen::MatrixXd jac = DenseJacobian(problem, blocks);
-  problem->SetManifold(chi_block, new ceres::SubsetManifold(p, fixed));
-  CHECK_EQ(static_cast<Eigen::Index>(p + effect_labels.size()), jac.cols());
-  Eigen::MatrixXd discarded(jac.rows(), static_cast<Eigen::Index>(fixed.size()));
+  const Eigen::MatrixXd& factor = jacobian.factor;
+  CHECK_EQ(jacobian.chi_columns, p);
+  CHECK_EQ(static_cast<Eigen::Index>(p + effect_labels.size()), factor.cols());
+  Eigen::MatrixXd discarded(factor.rows(), static_cast<Eigen::Index>(fixed.size()));
   for (size_t k = 0; k < fixed.size(); ++k) {
-    const double norm = jac.col(fixed[k]).norm();
+    const double norm = factor.col(fixed[k]).norm();
     discarded.col(static_cast<Eigen::Index>(k)) =
-        norm > 0.0 ? Eigen::VectorXd(jac.col(fixed[k]) / norm) : Eigen::VectorXd::Zero(jac.rows());
+        norm > 0.0 ? Eigen::VectorXd(factor.col(fixed[k]) / norm) : Eigen::VectorXd::Zero(factor.rows());
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(discarded);
   std::vector<RestingOnDiscarded> found;
   for (size_t e = 0; e < effect_labels.size(); ++e) {
-    const Eigen::VectorXd column = jac.col(p + static_cast<Eigen::Index>(e));
+    const Eigen::VectorXd column = factor.col(p + static_cast<Eigen::Index>(e));
     const double norm = column.norm();
     if (norm == 0.0) continue;
     const Eigen::VectorXd unit = column / norm;
@@ -293,21 +308,23 @@ struct EffectProblem {
   std::vector<int> fixed, free;                // chi coordinates held at 0 / estimated
   std::vector<std::unique_ptr<RotorSignalCache>> caches;
   std::vector<internal::RotorMomentAnchor> anchors;
+  std::vector<ceres::ResidualBlockId> residual_blocks;
   std::unique_ptr<ceres::Problem> problem;
 };
 
 // The parameter blocks: chi scaled by max(|chi|, std), one block per enabled effect in registry
 // order started at `start` (the other effects stay fixed at their start).
-void SetUpParameterBlocks(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
-                          const RefineOptions& options, EffectProblem* ep) {
-  const int p = linear.system.num_parameters();
+void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const IdimLayout& system,
+                          const TlsSolution& tls, const Effects& start, const RefineOptions& options,
+                          EffectProblem* ep) {
+  const int p = system.num_parameters();
   ep->context.metric = tls.column_metric;
-  ep->context.total_rows = static_cast<double>(linear.system.w.rows());
+  ep->context.total_rows = static_cast<double>(system.row_group.size());
   ep->context.num_parameters = p;
   ep->context.chi_scale.resize(p);
   for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(tls.chi[k]), tls.std[k], 1e-12});
   ep->scaled_chi = tls.chi.cwiseQuotient(ep->context.chi_scale);
-  const Vehicle& vehicle = linear.flights.front().vehicle;
+  const Vehicle& vehicle = flights.front().vehicle;
   ep->effect_blocks.fixed = start;
   for (EffectKind kind : AllEffects())
     if (options.Enabled(kind)) ep->effect_blocks.free.push_back(kind);
@@ -325,29 +342,41 @@ void SetUpParameterBlocks(const IdentificationResult& linear, const TlsSolution&
   for (int k = 0; k < p; ++k) (tls.essential[k] ? ep->free : ep->fixed).push_back(k);
 }
 
+// The anchored criterion's anchor of each flight at tls.chi (none for the TLS criterion), from the
+// rows of `system`, which a pass needs no further.
+std::vector<internal::RotorMomentAnchor> AnchorFlights(const std::vector<ProcessedFlight>& flights,
+                                                       const IdimSystem& system, const TlsSolution& tls,
+                                                       const RefineOptions& options) {
+  std::vector<internal::RotorMomentAnchor> anchors;
+  if (options.criterion != "anchored") return anchors;
+  int row = 0;
+  for (int f = 0; f < system.num_flights(); ++f) {
+    anchors.push_back(internal::AnchorRotorMoments(flights[f], system, f, row, tls.chi));
+    row += 6 * flights[f].num_rows_samples();
+  }
+  return anchors;
+}
+
 // The rows of every flight, in blocks of kRowSamplesPerBlock row samples, weighted as the TLS
-// weighted them; with the anchored criterion each flight's moment rows are anchored at tls.chi.
-void AddRowResiduals(const IdentificationResult& linear, const TlsSolution& tls, const RefineOptions& options,
-                     EffectProblem* ep) {
-  const IdimSystem& system = linear.system;
-  const bool anchored = options.criterion == "anchored";
-  ep->anchors.reserve(static_cast<size_t>(system.num_flights()));  // the caches point into it
+// weighted them; with the anchored criterion each flight's moment rows divided by its anchor's gain.
+void AddRowResiduals(const std::vector<ProcessedFlight>& flights, const IdimLayout& system, const TlsSolution& tls,
+                     const RefineOptions& options, EffectProblem* ep) {
   const Eigen::VectorXd sqrt_weight = tls.row_weight.cwiseSqrt();
   int row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
-    const ProcessedFlight& flight = linear.flights[f];
-    if (anchored) ep->anchors.push_back(internal::AnchorRotorMoments(flight, system, f, row, tls.chi));
-    ep->caches.push_back(
-        std::make_unique<RotorSignalCache>(&flight, &ep->effect_blocks, anchored ? &ep->anchors.back() : nullptr));
+    const ProcessedFlight& flight = flights[f];
+    ep->caches.push_back(std::make_unique<RotorSignalCache>(&flight, &ep->effect_blocks,
+                                                            ep->anchors.empty() ? nullptr : &ep->anchors[f]));
     for (int first = 0; first < flight.num_rows_samples(); first += kRowSamplesPerBlock) {
       const int count = std::min(kRowSamplesPerBlock, flight.num_rows_samples() - first);
       ceres::LossFunction* loss = nullptr;
       if (options.robust_loss == "huber") loss = new ceres::HuberLoss(options.robust_scale);
       if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
-      ep->problem->AddResidualBlock(new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context,
-                                                          &ep->effect_blocks, system.flight_body_columns[f], first,
-                                                          count, sqrt_weight.segment(row + 6 * first, 6 * count)),
-                                    loss, ep->blocks_of_residual);
+      ep->residual_blocks.push_back(ep->problem->AddResidualBlock(
+          new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context, &ep->effect_blocks,
+                                system.flight_body_columns[f], first, count,
+                                sqrt_weight.segment(row + 6 * first, 6 * count)),
+          loss, ep->blocks_of_residual));
     }
     row += 6 * flight.num_rows_samples();
   }
@@ -370,14 +399,17 @@ void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
       ep->problem->SetParameterUpperBound(values, static_cast<int>(a), upper / ep->effect_blocks.Scale(b));
     }
     if (PinResidual* pins = EffectPins(ep->effect_blocks.free[b], ep->effect_values[b], ep->context.total_rows))
-      ep->problem->AddResidualBlock(pins, nullptr, values);
+      ep->residual_blocks.push_back(ep->problem->AddResidualBlock(pins, nullptr, values));
   }
 }
 
 // Solves the problem and records the solver's report; throws when the solution is unusable.
 void SolveEffectProblem(const RefineOptions& options, ceres::Problem* problem, RefineResult* result) {
   ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
+  // The normal equations of the tall, narrow Jacobian (rows x 20-30 columns): J^T J by a symmetric
+  // rank update is several times cheaper than a QR of J, and Ceres' QR also copies J (200 MB on a
+  // 1 h log). The steps differ in round-off only; the solution within the tolerances below.
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.function_tolerance = 1e-12;
   solver_options.gradient_tolerance = 1e-14;
@@ -408,13 +440,29 @@ std::vector<std::string> FreeEffectLabels(const EffectProblem& ep) {
   return labels;
 }
 
+// The Jacobian's factor at the solution (SolutionJacobian). The discarded chi coordinates'
+// columns come from the chi block without its subset manifold, restored afterwards.
+SolutionJacobian FactorSolutionJacobian(EffectProblem* ep, int num_threads) {
+  SolutionJacobian jacobian;
+  std::vector<double*> blocks;
+  if (!ep->free.empty()) {
+    blocks.push_back(ep->scaled_chi.data());
+    jacobian.chi_columns = ep->context.num_parameters;
+  }
+  for (Eigen::VectorXd& v : ep->effect_values) blocks.push_back(v.data());
+  if (blocks.empty()) return jacobian;
+  const bool has_manifold = !ep->free.empty() && !ep->fixed.empty();
+  if (has_manifold) ep->problem->SetManifold(ep->scaled_chi.data(), nullptr);
+  jacobian.factor = JacobianFactor(ep->problem.get(), blocks, ep->residual_blocks, num_threads);
+  if (has_manifold)
+    ep->problem->SetManifold(ep->scaled_chi.data(), new ceres::SubsetManifold(ep->context.num_parameters, ep->fixed));
+  return jacobian;
+}
+
 // Warns of effect coordinates whose value rests on a parameter the essential selection holds at 0.
-void NoteEffectsRestingOnDiscarded(EffectProblem* ep, const IdimSystem& system,
+void NoteEffectsRestingOnDiscarded(const EffectProblem& ep, const SolutionJacobian& jacobian, const IdimLayout& system,
                                    const std::vector<std::string>& effect_labels, RefineResult* result) {
-  std::vector<double*> effect_block_pointers;
-  for (Eigen::VectorXd& v : ep->effect_values) effect_block_pointers.push_back(v.data());
-  for (const RestingOnDiscarded& r : EffectsRestingOnDiscarded(
-           ep->problem.get(), ep->scaled_chi.data(), effect_block_pointers, system, ep->fixed, effect_labels)) {
+  for (const RestingOnDiscarded& r : EffectsRestingOnDiscarded(jacobian, system, ep.fixed, effect_labels)) {
     result->resting_on_discarded.push_back(r.coordinate + " ~ " + r.parameter);
     result->warnings.push_back(r.coordinate + " is confounded with " + r.parameter +
                                ", which the essential selection holds at 0 (it explains " +
@@ -448,22 +496,25 @@ std::string WhatATradingPairFixes(const RefineResult& result, int a, int b) {
 // The covariance of chi and the effects at the solution, scaled by the observed residual variance
 // (`cost` over the degrees of freedom) and the autocorrelation factor; where the Jacobian is rank
 // deficient, the confounded coordinates instead.
-void ComputeRefinedCovariance(EffectProblem* ep, const IdimSystem& system, double cost, Eigen::Index num_residuals,
-                              const std::vector<std::string>& effect_labels, RefineResult* result) {
-  std::vector<const double*> blocks;
-  if (!ep->free.empty()) blocks.push_back(ep->scaled_chi.data());
-  for (const Eigen::VectorXd& v : ep->effect_values) blocks.push_back(v.data());
-  if (blocks.empty()) return;
-  std::vector<std::pair<const double*, const double*>> pairs;
-  for (size_t a = 0; a < blocks.size(); ++a)
-    for (size_t b = a; b < blocks.size(); ++b) pairs.emplace_back(blocks[a], blocks[b]);
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::DENSE_SVD;
-  covariance_options.null_space_rank = 0;
-  ceres::Covariance covariance(covariance_options);
-  if (!covariance.Compute(pairs, ep->problem.get())) {
+void ComputeRefinedCovariance(const EffectProblem& ep, const SolutionJacobian& jacobian, const IdimLayout& system,
+                              double cost, Eigen::Index num_residuals, const std::vector<std::string>& effect_labels,
+                              RefineResult* result) {
+  if (jacobian.factor.size() == 0) return;
+  // The tangent coordinates: the free chi coordinates, then every effect coordinate.
+  std::vector<Eigen::Index> columns(ep.free.begin(), ep.free.end());
+  std::vector<std::string> labels;
+  for (int k : ep.free) labels.push_back(system.parameter_names[k]);
+  labels.insert(labels.end(), effect_labels.begin(), effect_labels.end());
+  for (Eigen::Index e = 0; e < static_cast<Eigen::Index>(effect_labels.size()); ++e)
+    columns.push_back(jacobian.chi_columns + e);
+  const Eigen::MatrixXd tangent = jacobian.factor(Eigen::all, columns);
+  // As ceres::Covariance's DENSE_SVD with null_space_rank 0: rank deficient when a singular value is
+  // below sqrt(1e-14) (its default min_reciprocal_condition_number) of the largest.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(tangent, Eigen::ComputeThinV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  if (!(sv.size() > 0 && sv.minCoeff() >= std::sqrt(1e-14) * sv[0])) {
     result->rank_deficient = true;
-    result->confounded = NullSpaceParameters(ep->problem.get(), blocks, system, ep->free, effect_labels);
+    result->confounded = NullSpaceParameters(tangent, labels);
     const std::string names = Join(result->confounded);
     result->warnings.push_back(
         "the refined parameters are not jointly identifiable from these flights (rank-deficient "
@@ -473,54 +524,55 @@ void ComputeRefinedCovariance(EffectProblem* ep, const IdimSystem& system, doubl
   }
   // Whitened residuals have unit variance only if the noise model is right: scale by the
   // observed residual variance and by the autocorrelation factor.
-  const double dof = std::max(1.0, static_cast<double>(num_residuals) - ep->problem->NumParameters());
+  const double dof = std::max(1.0, static_cast<double>(num_residuals) - ep.problem->NumParameters());
   const double scale = std::max(2.0 * cost / dof, 1e-300) * result->autocorrelation_factor;
-  int dim = 0;
-  for (const double* b : blocks) dim += ep->problem->ParameterBlockTangentSize(b);
-  Eigen::MatrixXd full(dim, dim);
-  covariance.GetCovarianceMatrixInTangentSpace(blocks, full.data());
-  full *= scale;
+  const Eigen::Index dim = tangent.cols();
+  const Eigen::MatrixXd full =
+      scale * (svd.matrixV() * sv.cwiseAbs2().cwiseInverse().asDiagonal() * svd.matrixV().transpose());
   result->has_covariance = true;
-  const std::vector<int>& free = ep->free;
-  const Eigen::VectorXd& chi_scale = ep->context.chi_scale;
+  const std::vector<int>& free = ep.free;
+  const Eigen::VectorXd& chi_scale = ep.context.chi_scale;
   const int offset = static_cast<int>(free.size());
   for (int a = 0; a < offset; ++a)
     for (int b = 0; b < offset; ++b)
       result->refined.covariance(free[a], free[b]) = full(a, b) * chi_scale[free[a]] * chi_scale[free[b]];
-  const int effect_dim = dim - offset;
+  const Eigen::Index effect_dim = dim - offset;
   const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
-  int e = 0;
-  for (size_t b = 0; b < ep->effect_blocks.free.size(); ++b) {
-    const Eigen::Index size = ep->effect_values[b].size();
+  Eigen::Index e = 0;
+  for (size_t b = 0; b < ep.effect_blocks.free.size(); ++b) {
+    const Eigen::Index size = ep.effect_values[b].size();
     Eigen::VectorXd std_dev =
-        ep->effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt();
-    for (int k : ep->effect_blocks.free[b]->info().held_coordinates) std_dev[k] = 0.0;  // not estimated
-    result->effects_std.Set(ep->effect_blocks.free[b], std_dev);
-    e += static_cast<int>(size);
+        ep.effect_blocks.Scale(b) * effect_cov.diagonal().segment(e, size).cwiseMax(0.0).cwiseSqrt();
+    for (int k : ep.effect_blocks.free[b]->info().held_coordinates) std_dev[k] = 0.0;  // not estimated
+    result->effects_std.Set(ep.effect_blocks.free[b], std_dev);
+    e += size;
   }
   result->effect_labels = effect_labels;
   const Eigen::VectorXd sd = effect_cov.diagonal().cwiseMax(1e-300).cwiseSqrt();
   result->effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
 }
 
-// One Ceres pass: the rows of `linear`'s flights with effects, the criterion (lambda, N) of `tls`,
-// started at tls.chi and `start`. Fills chi, effects, their covariance and the solver report.
-RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution& tls, const Effects& start,
-                          const RefineOptions& options) {
+// One Ceres pass: the rows of the flights with effects, the criterion (lambda, N) of `tls` on a
+// system of this layout, with its `anchors` (AnchorFlights), started at tls.chi and `start`. Fills
+// chi, effects, their covariance and the solver report.
+RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const IdimLayout& system,
+                          std::vector<internal::RotorMomentAnchor> anchors, const TlsSolution& tls,
+                          const Effects& start, const RefineOptions& options) {
   RefineResult result;
   result.enabled = options.effects;
   EffectProblem ep;
-  SetUpParameterBlocks(linear, tls, start, options, &ep);
+  ep.anchors = std::move(anchors);  // before the residual blocks, which point into it
+  SetUpParameterBlocks(flights, system, tls, start, options, &ep);
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
   ep.problem = std::make_unique<ceres::Problem>(problem_options);
-  AddRowResiduals(linear, tls, options, &ep);
+  AddRowResiduals(flights, system, tls, options, &ep);
   ConstrainParameters(options, &ep);
   SolveEffectProblem(options, ep.problem.get(), &result);
 
   const Eigen::VectorXd chi = ep.scaled_chi.cwiseProduct(ep.context.chi_scale);
-  result.effects = ep.effect_blocks.At(ep.blocks_of_residual.data(), linear.flights.front().vehicle);
+  result.effects = ep.effect_blocks.At(ep.blocks_of_residual.data(), flights.front().vehicle);
   result.refined = tls;
   result.refined.chi = chi;
   result.refined.covariance.setZero();
@@ -536,8 +588,9 @@ RefineResult SolveEffects(const IdentificationResult& linear, const TlsSolution&
   const std::vector<std::string> effect_labels = FreeEffectLabels(ep);
   // A report for people: fits that skip the covariance (diagnosis folds, ablation) skip it too.
   if (options.compute_covariance) {
-    if (!ep.free.empty()) NoteEffectsRestingOnDiscarded(&ep, linear.system, effect_labels, &result);
-    ComputeRefinedCovariance(&ep, linear.system, cost, residuals.size(), effect_labels, &result);
+    const SolutionJacobian jacobian = FactorSolutionJacobian(&ep, options.num_threads);
+    if (!ep.free.empty()) NoteEffectsRestingOnDiscarded(ep, jacobian, system, effect_labels, &result);
+    ComputeRefinedCovariance(ep, jacobian, system, cost, residuals.size(), effect_labels, &result);
   }
   result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   for (int k = 0; k < chi.size(); ++k)
@@ -602,7 +655,9 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       if (kind->info().grid_searched) start.Set(kind, CoarseDelaySearch(linear, options, kind));
     step_done();
   }
-  RefineResult result = SolveEffects(linear, linear.solution, start, options);
+  RefineResult result = SolveEffects(linear.flights, linear.system,
+                                     AnchorFlights(linear.flights, linear.system, linear.solution, options),
+                                     linear.solution, start, options);
   step_done();
   if (options.reselect_essential && !options.effects.empty()) {
     // The TLS weights and equation-error variances of the linear step were fitted to the residual of
@@ -611,14 +666,15 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     // the estimated effects, and refine again from there, until the effects settle.
     Effects previous = result.effects;
     for (int pass = 2; pass <= kMaxRefinePasses; ++pass) {
-      IdentificationResult restarted = linear;
-      restarted.system.w = SystemRowsWithEffects(linear, result.effects);
-      TlsSolution reselected = SolveIdim(restarted.system, linear.options.tls);
+      IdimSystem corrected{linear.system, SystemRowsWithEffects(linear, result.effects)};
+      TlsSolution reselected = SolveIdim(corrected, linear.options.tls);
       if (!reselected.usable) break;
-      restarted.solution = reselected;
+      std::vector<internal::RotorMomentAnchor> anchors = AnchorFlights(linear.flights, corrected, reselected, options);
+      corrected.w = Eigen::MatrixXd();  // the pass needs its layout only; the rows are 100 MB on a 1 h log
       RefineOptions next = options;
       next.coarse_delay_search = false;
-      RefineResult candidate = SolveEffects(restarted, reselected, result.effects, next);
+      RefineResult candidate =
+          SolveEffects(linear.flights, corrected, std::move(anchors), reselected, result.effects, next);
       candidate.reselected = reselected;
       result = std::move(candidate);
       step_done();

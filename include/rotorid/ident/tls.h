@@ -28,13 +28,12 @@
 
 namespace rotorid {
 
-// W_t of one or several flights. Flights of the same vehicle name share that configuration's
+// W_t of one or several flights (IdimSystem: its layout, IdimLayout, and the rows w). Flights of the same vehicle name share that configuration's
 // chi; kt and kd are shared by all. Columns: [kt kd chi_config1 ... chi_configC | mass column].
 // A flight with a first-moment label (ProcessedFlight::first_moment_label, per-flight first moments)
 // has its own three first-moment columns: its configuration's block is then
 // [ms of its first label, ms of its second label, ..., the six inertia entries].
-struct IdimSystem {
-  Eigen::MatrixXd w;
+struct IdimLayout {
   std::vector<std::string> parameter_names;  // one per column but the last
   std::vector<std::string> config_names;
   // Per row: its group (wrench component + 6 * flight) and its sample number within the flight
@@ -60,6 +59,11 @@ struct IdimSystem {
   int SystemColumn(int f, int k) const;
   // Writes flight f's own rows `wf` into w's columns, from `first_row` on.
   void PlaceFlightRows(int f, const Eigen::MatrixXd& wf, Eigen::Index first_row, Eigen::MatrixXd* w) const;
+};
+// The layout and its rows. The layout apart lets the refinement pair the same layout with rows
+// corrected by effects without copying the linear rows first (W_t of a 1 h log is 100 MB).
+struct IdimSystem : IdimLayout {
+  Eigen::MatrixXd w;
 };
 
 IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights);
@@ -122,6 +126,12 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 // the rows `w` (same layout as the system the solution came from), with the solution's lambda and N:
 // the TLS criterion of other data (e.g. with an effect applied) under fixed weights.
 double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution);
+// The columns of w that criterion uses: the essential parameters', then the known column.
+std::vector<int> CriterionColumns(const TlsSolution& solution);
+// The same criterion from any factor r of the weighted rows, r^T r = W^T diag(lambda) W over
+// CriterionColumns (in that order; r need not be triangular): the delay's grid search assembles it
+// from a factor of the columns that stay fixed along the grid.
+double MinimumTlsCriterionOfFactor(const Eigen::MatrixXd& r, const TlsSolution& solution);
 
 // Table III of the paper: per wrench component, ||rho_j|| / ||W_k chi_k (j)|| in %, over the
 // given rows (raw SI, unweighted); nullopt when the denominator is zero.
