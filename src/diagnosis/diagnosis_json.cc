@@ -134,13 +134,8 @@ json DiagnosisJson(const Diagnosis& d) {
                   {"confounded_with", Kinds(v.confounded_with)},
                   {"dropped_as_redundant", v.dropped_as_redundant},
                   {"note", v.note}};
-    if (!v.kind->info().held_coordinates.empty()) {
-      const std::vector<std::string> labels = v.kind->Labels(static_cast<int>(v.value.size()));
-      json held = json::array();
-      for (int k : v.kind->info().held_coordinates)
-        if (k < v.value.size()) held.push_back(labels[static_cast<size_t>(k)]);
+    if (const std::vector<std::string> held = v.kind->HeldLabels(static_cast<int>(v.value.size())); !held.empty())
       entry["magnitude"][name]["held"] = held;
-    }
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
     ranking.push_back(entry);
   }

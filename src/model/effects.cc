@@ -90,6 +90,14 @@ bool EffectDescriptor::Held(int coordinate) const {
          info_.held_coordinates.end();
 }
 
+std::vector<std::string> EffectDescriptor::HeldLabels(int dimension) const {
+  const std::vector<std::string> labels = Labels(dimension);
+  std::vector<std::string> held;
+  for (int k : info_.held_coordinates)
+    if (k < dimension) held.push_back(labels[static_cast<size_t>(k)]);
+  return held;
+}
+
 std::string EffectDescriptor::Format(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const {
   const double unit = info_.display_scale;
   std::ostringstream out;

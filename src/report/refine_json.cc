@@ -36,11 +36,8 @@ std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& val
         out.push_back({labels[k], Eigen::VectorXd::Constant(1, at(v, k)), Eigen::VectorXd::Constant(1, at(s, k)),
                        true, on, bounded, {}});
     } else {
-      EffectParameterEstimate estimate{EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded, {}};
-      const std::vector<std::string> coordinate_labels = kind->Labels(static_cast<int>(v.size()));
-      for (int k : kind->info().held_coordinates)
-        if (k < v.size()) estimate.held.push_back(coordinate_labels[static_cast<size_t>(k)]);
-      out.push_back(std::move(estimate));
+      out.push_back({EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded,
+                     kind->HeldLabels(static_cast<int>(v.size()))});
     }
   }
   return out;

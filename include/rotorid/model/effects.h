@@ -216,6 +216,8 @@ class EffectDescriptor {
     return Dimension(vehicle) - (info_.zero_sum ? 1 : 0) - static_cast<int>(info_.held_coordinates.size());
   }
   bool Held(int coordinate) const;
+  // Labels of the held coordinates for this dimension: {"imu_position_m_z"}.
+  std::vector<std::string> HeldLabels(int dimension) const;
   // Dimension without a vehicle, or -1 when it depends on one.
   virtual int FixedDimension() const { return info_.per_rotor ? -1 : info_.dimension; }
   // Labels of the scalar parameters: {"delay_s"} or {"acc_bias_x", "acc_bias_y", "acc_bias_z"}.
