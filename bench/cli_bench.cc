@@ -7,8 +7,8 @@
 // binary (e.g. a copy of the one before a change), beside it, for a before/after table.
 //
 //   cli_bench [runs=5] [--long] [--identify-only] [--baseline /path/to/old/rotorid]
-//   (--long adds the 1 h log: about a minute to simulate, once; --identify-only skips refine,
-//   delay, ablate and diagnose)
+//   (--long adds the 1 h log: about a minute to simulate, once; identify on it, and refine unless
+//   --identify-only; --identify-only skips refine, delay, ablate and diagnose)
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -120,9 +120,15 @@ int main(int argc, char** argv) {
                      std::min(runs, 3)});
     cases.push_back({"diagnose, 90 s log", with({rotorid, "diagnose"}, flight), runs});
   }
-  if (long_log)
-    cases.push_back(
-        {"identify, 1 h log", {rotorid, "identify", "--vehicle", path("b.yaml"), "--log", path("b3600.csv")}, runs});
+  if (long_log) {
+    const std::vector<std::string> long_flight = {"--vehicle", path("b.yaml"), "--log", path("b3600.csv")};
+    cases.push_back({"identify, 1 h log", with({rotorid, "identify"}, long_flight), runs});
+    if (!identify_only)  // a minute or two per run before issue 14: three runs
+      cases.push_back(
+          {"refine, the five v1 effects, 1 h log",
+           with({rotorid, "refine", "--effects", "delay,motor_lag,acc_bias,gyro_bias,misalignment"}, long_flight),
+           std::min(runs, 3)});
+  }
   if (!baseline.empty()) {  // each rotorid case again with the baseline binary, run beside it
     std::vector<Case> paired;
     for (const Case& c : cases) {

@@ -60,10 +60,10 @@ Command AddAblateCommand(CLI::App& root) {
   command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const LoadedFlights training = LoadTrainingFlights(options->flights, source);
+    LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
     std::vector<Check> checks;
-    const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
+    const IdentificationResult linear = IdentifyWithChecks(std::move(training.flights), identify, &checks);
     const std::vector<EffectKind> effects = EffectsForFlights(options->effects, linear, options->flights.quiet);
     std::vector<ProcessedFlight> held_out;
     if (!validation.flights.empty()) held_out = ProcessFlights(validation.flights, identify.observation);

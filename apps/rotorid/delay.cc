@@ -40,9 +40,9 @@ Command AddDelayCommand(CLI::App& root) {
     IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
     // The delay shows in every parameter; a partial linear start is fine here.
     identify.allow_partial = true;
-    const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
+    LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
     std::vector<Check> checks;
-    const IdentificationResult linear = IdentifyWithChecks(loaded.flights, identify, &checks);
+    const IdentificationResult linear = IdentifyWithChecks(std::move(loaded.flights), identify, &checks);
     Progress progress("delay: search and Ceres passes", DelaySteps(options->delay), options->flights.quiet);
     progress.StartTicking();
     const DelayEstimate estimate =

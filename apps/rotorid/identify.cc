@@ -27,14 +27,14 @@ Command AddIdentifyCommand(CLI::App& root) {
   AddFirstMomentOption(command.app, &options->identify);
   command.run = [options, app = command.app]() {
     const IdentifyOptions identify = ResolveIdentifyOptions(&options->identify);
-    const LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
-    const std::vector<FlightData>& flights = loaded.flights;
+    LoadedFlights loaded = LoadTrainingFlights(options->flights, SourceOptions(options->identify));
+    const size_t num_flights = loaded.flights.size();
     // Long logs take seconds: a progress line on a terminal (nothing drawn for short work).
-    Progress progress("identify: processing, system, TLS", IdentifySteps(flights), options->flights.quiet);
+    Progress progress("identify: processing, system, TLS", IdentifySteps(loaded.flights), options->flights.quiet);
     progress.StartTicking();
     std::vector<Check> checks;
-    const IdentificationResult result =
-        IdentifyWithChecks(flights, identify, &checks, [&progress](int done, int) { progress.Update(done); });
+    const IdentificationResult result = IdentifyWithChecks(std::move(loaded.flights), identify, &checks,
+                                                           [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     checks.push_back(CheckResidualSignature(result));
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
@@ -55,7 +55,7 @@ Command AddIdentifyCommand(CLI::App& root) {
     const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "
-                << DataSourceName(identify.observation.source) << " data, " << flights.size() << " flight(s), "
+                << DataSourceName(identify.observation.source) << " data, " << num_flights << " flight(s), "
                 << result.system.w.rows() << " equations\n";
       PrintParameterTable(std::cout, result.system.parameter_names, result.solution);
       std::cout << "relative error (paper Table III): " << FormatComponents(result.relative_error_pct) << "\n";

@@ -99,10 +99,10 @@ Command AddRefineCommand(CLI::App& root) {
     for (const std::string& assignment : options->initial) refine.initial.Assign(assignment);
     if (const std::string problem = refine.Validate(); !problem.empty()) throw Error(problem);
     const FlightSourceOptions source = SourceOptions(options->identify);
-    const LoadedFlights training = LoadTrainingFlights(options->flights, source);
+    LoadedFlights training = LoadTrainingFlights(options->flights, source);
     const LoadedFlights validation = LoadValidationFlights(options->flights, source);
     std::vector<Check> checks;
-    const IdentificationResult linear = IdentifyWithChecks(training.flights, identify, &checks);
+    const IdentificationResult linear = IdentifyWithChecks(std::move(training.flights), identify, &checks);
     refine.effects = EffectsForFlights(options->effects, linear, options->flights.quiet);
     Progress progress("refine: delay search and Ceres passes", RefineSteps(refine), options->flights.quiet);
     progress.StartTicking();

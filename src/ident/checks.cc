@@ -453,17 +453,18 @@ std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& 
 
 int IdentifySteps(const std::vector<FlightData>& flights) { return static_cast<int>(flights.size()) + 2; }
 
-IdentificationResult IdentifyWithChecks(const std::vector<FlightData>& flights, const IdentifyOptions& options,
+IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const IdentifyOptions& options,
                                         std::vector<Check>* checks, const StepProgress& progress) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   const int total_steps = IdentifySteps(flights);
   std::vector<ProcessedFlight> processed =
       ProcessFlights(flights, options.observation, OffsetProgress(progress, 0, total_steps));
   *checks = CheckFlights(flights, processed);
+  const int num_flights = static_cast<int>(flights.size());
+  flights = {};
   IdentificationResult result;
   try {
-    result = IdentifyProcessed(std::move(processed), options,
-                               OffsetProgress(progress, static_cast<int>(flights.size()), total_steps));
+    result = IdentifyProcessed(std::move(processed), options, OffsetProgress(progress, num_flights, total_steps));
   } catch (const Error& e) {
     if (!AnyCheckFailed(*checks)) throw;
     throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(*checks));

@@ -244,15 +244,17 @@ FlightInputs ProcessedFlight::inputs() const {
   return available;
 }
 
+Eigen::Matrix<double, 6, kNumIdimColumns> IdimRowsOfRowSample(const ProcessedFlight& flight, int r) {
+  const int i = flight.row_samples[r];
+  const Eigen::Vector3d omega = flight.angular_velocity.row(i), omega_dot = flight.angular_acceleration.row(i),
+                        s = flight.specific_force.row(i);
+  return IdimRows<double>(omega, omega_dot, s, flight.rotor.row(i).transpose(), flight.vehicle);
+}
+
 Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight) {
   const int rows = flight.num_rows_samples();
   Eigen::MatrixXd w(6 * rows, kNumIdimColumns);
-  for (int r = 0; r < rows; ++r) {
-    const int i = flight.row_samples[r];
-    const Eigen::Vector3d omega = flight.angular_velocity.row(i), omega_dot = flight.angular_acceleration.row(i),
-                          s = flight.specific_force.row(i);
-    w.middleRows<6>(6 * r) = IdimRows<double>(omega, omega_dot, s, flight.rotor.row(i).transpose(), flight.vehicle);
-  }
+  for (int r = 0; r < rows; ++r) w.middleRows<6>(6 * r) = IdimRowsOfRowSample(flight, r);
   return w;
 }
 

@@ -102,13 +102,17 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
   system.row_sample.reserve(total_rows);
   int row = 0;
   for (int f = 0; f < static_cast<int>(flights.size()); ++f) {
-    const Eigen::MatrixXd wf = BuildIdimMatrix(flights[f]);
-    system.PlaceFlightRows(f, wf, row, &system.w);
-    for (int i = 0; i < wf.rows(); ++i) {
+    // Row sample by row sample into the system's columns: no flight-sized copy beside W.
+    for (int r = 0; r < flights[f].num_rows_samples(); ++r) {
+      const Eigen::Matrix<double, 6, kNumIdimColumns> rows = IdimRowsOfRowSample(flights[f], r);
+      for (int k = 0; k < kNumIdimColumns; ++k)
+        system.w.block<6, 1>(row + 6 * r, system.SystemColumn(f, k)) = rows.col(k);
+    }
+    for (int i = 0; i < 6 * flights[f].num_rows_samples(); ++i) {
       system.row_group.push_back(6 * f + i % 6);
       system.row_sample.push_back(i / 6);
     }
-    row += static_cast<int>(wf.rows());
+    row += 6 * flights[f].num_rows_samples();
     for (const Eigen::MatrixXd& cov : IdimNoiseCovariance(flights[f])) {
       Eigen::MatrixXd mapped = Eigen::MatrixXd::Zero(p + 1, p + 1);
       for (int a = 0; a < kNumIdimColumns; ++a)
@@ -173,15 +177,6 @@ Eigen::MatrixXd SelectBlock(const Eigen::MatrixXd& m, const std::vector<int>& co
   for (size_t a = 0; a < columns.size(); ++a)
     for (size_t b = 0; b < columns.size(); ++b) out(a, b) = m(columns[a], columns[b]);
   return out;
-}
-
-// Triangular factor R of the row-weighted matrix (R^T R = A^T diag(weight) A), by Householder QR
-// of blocks so that memory stays O(rows x columns) once.
-Eigen::MatrixXd WeightedR(const Eigen::MatrixXd& a, const Eigen::VectorXd& weight) {
-  Eigen::MatrixXd scaled = weight.cwiseSqrt().asDiagonal() * a;
-  Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(scaled);
-  const int n = static_cast<int>(a.cols());
-  return qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
 }
 
 // Smallest generalized eigenvector of (R^T R, metric): minimises |R x|^2 / (x^T metric x); scaled so
@@ -473,9 +468,15 @@ double MinimumTlsCriterionOfFactor(const Eigen::MatrixXd& r, const TlsSolution& 
   return denominator > 0.0 ? (r * x).squaredNorm() / denominator : 0.0;
 }
 
+double MinimumTlsCriterionOfColumns(Eigen::MatrixXd columns, const TlsSolution& solution) {
+  columns.array().colwise() *= solution.row_weight.cwiseSqrt().array();
+  const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(columns);
+  const Eigen::Index n = columns.cols();
+  return MinimumTlsCriterionOfFactor(qr.matrixQR().topRows(n).triangularView<Eigen::Upper>(), solution);
+}
+
 double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution) {
-  return MinimumTlsCriterionOfFactor(WeightedR(SelectColumns(w, CriterionColumns(solution)), solution.row_weight),
-                                     solution);
+  return MinimumTlsCriterionOfColumns(SelectColumns(w, CriterionColumns(solution)), solution);
 }
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {

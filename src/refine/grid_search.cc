@@ -16,6 +16,22 @@ std::vector<double> SearchGrid(double min, double max, double step) {
   return grid;
 }
 
+Eigen::MatrixXd SystemColumnsWithEffects(const IdentificationResult& linear, const Effects& effects,
+                                         const std::vector<int>& columns) {
+  const IdimSystem& system = linear.system;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(system.w.rows(), static_cast<Eigen::Index>(columns.size()));
+  Eigen::Index row = 0;
+  for (int f = 0; f < system.num_flights(); ++f) {
+    const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear.flights[f], effects);
+    for (Eigen::Index k = 0; k < wf.cols(); ++k) {
+      const auto at = std::find(columns.begin(), columns.end(), system.SystemColumn(f, static_cast<int>(k)));
+      if (at != columns.end()) out.col(at - columns.begin()).segment(row, wf.rows()) = wf.col(k);
+    }
+    row += wf.rows();
+  }
+  return out;
+}
+
 namespace {
 
 // The criterion along the grid of a rotor-signal effect (the delay). Such an effect moves only the
@@ -40,7 +56,7 @@ class RotorSignalGrid {
       (changes ? changing_ : fixed_).push_back(column);
     }
     sqrt_weight_ = solution.row_weight.cwiseSqrt();
-    fixed_qr_.compute(sqrt_weight_.asDiagonal() * SystemRows(trial, fixed_));
+    fixed_qr_.compute(sqrt_weight_.asDiagonal() * SystemColumnsWithEffects(linear, trial, fixed_));
   }
 
   double Criterion(double value) const {
@@ -49,7 +65,8 @@ class RotorSignalGrid {
     const Eigen::Index n_fixed = static_cast<Eigen::Index>(fixed_.size());
     const Eigen::Index n_changing = static_cast<Eigen::Index>(changing_.size());
     Eigen::MatrixXd changing =
-        sqrt_weight_.asDiagonal() * (wrench_acts_ ? SystemRows(trial, changing_) : RotorColumns(trial));
+        sqrt_weight_.asDiagonal() *
+        (wrench_acts_ ? SystemColumnsWithEffects(linear_, trial, changing_) : RotorColumns(trial));
     changing.applyOnTheLeft(fixed_qr_.householderQ().adjoint());
     const Eigen::HouseholderQR<Eigen::MatrixXd> rest(changing.bottomRows(changing.rows() - n_fixed));
     // The factor in the order [fixed, changing], then its columns back in the criterion's order.
@@ -68,22 +85,6 @@ class RotorSignalGrid {
   }
 
  private:
-  // The system's `columns` of every flight's rows with `effects`.
-  Eigen::MatrixXd SystemRows(const Effects& effects, const std::vector<int>& columns) const {
-    const IdimSystem& system = linear_.system;
-    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(system.w.rows(), static_cast<Eigen::Index>(columns.size()));
-    Eigen::Index row = 0;
-    for (int f = 0; f < system.num_flights(); ++f) {
-      const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear_.flights[f], effects);
-      for (Eigen::Index k = 0; k < wf.cols(); ++k) {
-        const auto at = std::find(columns.begin(), columns.end(), system.SystemColumn(f, static_cast<int>(k)));
-        if (at != columns.end()) out.col(at - columns.begin()).segment(row, wf.rows()) = wf.col(k);
-      }
-      row += wf.rows();
-    }
-    return out;
-  }
-
   // The changing columns without a rotor-wrench effect: the rotor columns (kt, kd) of every flight's
   // rows with `effects`, -D_k at the effective rotor speeds as IdimRows writes them, without the
   // body columns that IMU-only work would build for nothing.
@@ -118,9 +119,8 @@ std::vector<double> CriterionOverGrid(const IdentificationResult& linear, const 
   std::vector<double> criterion(grid.size(), 0.0);
   if (kind->stage() == EffectStage::kRotorSignal) {
     const RotorSignalGrid rotor_grid(linear, base, kind);
-    ParallelFor(static_cast<int>(grid.size()), threads, [&](int i) {
-      criterion[static_cast<size_t>(i)] = rotor_grid.Criterion(grid[static_cast<size_t>(i)]);
-    });
+    ParallelFor(static_cast<int>(grid.size()), threads,
+                [&](int i) { criterion[static_cast<size_t>(i)] = rotor_grid.Criterion(grid[static_cast<size_t>(i)]); });
     return criterion;
   }
   ParallelFor(static_cast<int>(grid.size()), threads, [&](int i) {

@@ -10,6 +10,11 @@
 
 namespace rotorid::internal {
 
+// The system's `columns` (in that order) of every flight's rows with `effects`, as the linear
+// system lays them out; without the other columns, and without any second copy of them.
+Eigen::MatrixXd SystemColumnsWithEffects(const IdentificationResult& linear, const Effects& effects,
+                                         const std::vector<int>& columns);
+
 // min, min + step, ... up to max (inclusive to round-off), accumulated as every caller did.
 std::vector<double> SearchGrid(double min, double max, double step);
 

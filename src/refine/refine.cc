@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <numeric>
 
 #include "refine/grid_search.h"
 #include "refine/idim_residual.h"
@@ -66,21 +67,16 @@ namespace {
 
 // System rows of all flights with the effects applied, in the layout of the linear system.
 Eigen::MatrixXd SystemRowsWithEffects(const IdentificationResult& linear, const Effects& effects) {
-  const IdimSystem& system = linear.system;
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(system.w.rows(), system.w.cols());
-  Eigen::Index row = 0;
-  for (int f = 0; f < system.num_flights(); ++f) {
-    const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear.flights[f], effects);
-    system.PlaceFlightRows(f, wf, row, &w);
-    row += wf.rows();
-  }
-  return w;
+  std::vector<int> every_column(static_cast<size_t>(linear.system.num_parameters()) + 1);
+  std::iota(every_column.begin(), every_column.end(), 0);
+  return internal::SystemColumnsWithEffects(linear, effects, every_column);
 }
 
 }  // namespace
 
 double EffectCriterion(const IdentificationResult& linear, const Effects& effects) {
-  return MinimumTlsCriterion(SystemRowsWithEffects(linear, effects), linear.solution);
+  return MinimumTlsCriterionOfColumns(
+      internal::SystemColumnsWithEffects(linear, effects, CriterionColumns(linear.solution)), linear.solution);
 }
 
 namespace {
@@ -314,9 +310,8 @@ struct EffectProblem {
 
 // The parameter blocks: chi scaled by max(|chi|, std), one block per enabled effect in registry
 // order started at `start` (the other effects stay fixed at their start).
-void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const IdimLayout& system,
-                          const TlsSolution& tls, const Effects& start, const RefineOptions& options,
-                          EffectProblem* ep) {
+void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const IdimLayout& system, const TlsSolution& tls,
+                          const Effects& start, const RefineOptions& options, EffectProblem* ep) {
   const int p = system.num_parameters();
   ep->context.metric = tls.column_metric;
   ep->context.total_rows = static_cast<double>(system.row_group.size());
@@ -372,11 +367,11 @@ void AddRowResiduals(const std::vector<ProcessedFlight>& flights, const IdimLayo
       ceres::LossFunction* loss = nullptr;
       if (options.robust_loss == "huber") loss = new ceres::HuberLoss(options.robust_scale);
       if (options.robust_loss == "cauchy") loss = new ceres::CauchyLoss(options.robust_scale);
-      ep->residual_blocks.push_back(ep->problem->AddResidualBlock(
-          new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context, &ep->effect_blocks,
-                                system.flight_body_columns[f], first, count,
-                                sqrt_weight.segment(row + 6 * first, 6 * count)),
-          loss, ep->blocks_of_residual));
+      ep->residual_blocks.push_back(
+          ep->problem->AddResidualBlock(new IdimResidualBlock(&flight, ep->caches.back().get(), &ep->context,
+                                                              &ep->effect_blocks, system.flight_body_columns[f], first,
+                                                              count, sqrt_weight.segment(row + 6 * first, 6 * count)),
+                                        loss, ep->blocks_of_residual));
     }
     row += 6 * flight.num_rows_samples();
   }

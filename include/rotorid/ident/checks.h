@@ -77,9 +77,11 @@ std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& 
 
 // Input checks, the identification, and the checks of its result. When the identification fails
 // while an input check has failed, the error names that likely cause. Progress steps
-// (IdentifySteps): each flight processed, the system built, the TLS solved.
+// (IdentifySteps): each flight processed, the system built, the TLS solved. The flights are taken:
+// their logs are released once processed and checked, before the system is built (the raw log of
+// a 1 h flight is 60 MB beside the processed flight and W_t; pass std::move(flights)).
 int IdentifySteps(const std::vector<FlightData>& flights);
-IdentificationResult IdentifyWithChecks(const std::vector<FlightData>& flights, const IdentifyOptions& options,
+IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const IdentifyOptions& options,
                                         std::vector<Check>* checks, const StepProgress& progress = {});
 
 }  // namespace rotorid

@@ -100,6 +100,8 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
 // The IDIM rows of one flight: 6 rows per row sample (sample-major, components Fx Fy Fz Mx My Mz),
 // columns [kt kd chi(9) m] as IdimRows.
 Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight);
+// Its rows 6 r .. 6 r + 5: those of row sample r.
+Eigen::Matrix<double, 6, kNumIdimColumns> IdimRowsOfRowSample(const ProcessedFlight& flight, int r);
 
 // Per wrench component (6), the sum over the flight's rows of the covariance of the errors of the
 // row entries (12x12, columns as BuildIdimMatrix) caused by the white noise of the signals, to first

@@ -28,11 +28,11 @@
 
 namespace rotorid {
 
-// W_t of one or several flights (IdimSystem: its layout, IdimLayout, and the rows w). Flights of the same vehicle name share that configuration's
-// chi; kt and kd are shared by all. Columns: [kt kd chi_config1 ... chi_configC | mass column].
-// A flight with a first-moment label (ProcessedFlight::first_moment_label, per-flight first moments)
-// has its own three first-moment columns: its configuration's block is then
-// [ms of its first label, ms of its second label, ..., the six inertia entries].
+// W_t of one or several flights (IdimSystem: its layout, IdimLayout, and the rows w). Flights of the same vehicle name
+// share that configuration's chi; kt and kd are shared by all. Columns: [kt kd chi_config1 ... chi_configC | mass
+// column]. A flight with a first-moment label (ProcessedFlight::first_moment_label, per-flight first moments) has its
+// own three first-moment columns: its configuration's block is then [ms of its first label, ms of its second label,
+// ..., the six inertia entries].
 struct IdimLayout {
   std::vector<std::string> parameter_names;  // one per column but the last
   std::vector<std::string> config_names;
@@ -132,6 +132,9 @@ std::vector<int> CriterionColumns(const TlsSolution& solution);
 // CriterionColumns (in that order; r need not be triangular): the delay's grid search assembles it
 // from a factor of the columns that stay fixed along the grid.
 double MinimumTlsCriterionOfFactor(const Eigen::MatrixXd& r, const TlsSolution& solution);
+// The same criterion from the rows' CriterionColumns alone (rows x those columns, in that order),
+// weighted and factored in place: no second W-sized matrix (W_t of a 1 h log is 100 MB).
+double MinimumTlsCriterionOfColumns(Eigen::MatrixXd columns, const TlsSolution& solution);
 
 // Table III of the paper: per wrench component, ||rho_j|| / ||W_k chi_k (j)|| in %, over the
 // given rows (raw SI, unweighted); nullopt when the denominator is zero.
