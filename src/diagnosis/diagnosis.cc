@@ -267,9 +267,10 @@ RefineResult RefineOnAllData(const IdentificationResult& full, const ModelRecord
 }
 
 // The final model on all identification data and the criterion linearised there (std, detectable
-// sizes). A kept effect whose final value lies outside its physical range is marked implausible in
-// `tested` and dropped from `kept`, and the rest refined again: the fold fits can be plausible while
-// the fit on all data runs off (an IMU lever arm to its 300 mm bound on top of an acc bias).
+// sizes). A kept effect whose final value lies outside its physical range (or below the size that
+// matters) is marked implausible (negligible) in `tested` and dropped from `kept`, and the rest
+// refined again: the fold fits can be plausible while the fit on all data runs off (an IMU lever arm
+// to its 300 mm bound on top of an acc bias).
 struct FinalModel {
   std::map<std::string, double> parameters;
   Effects effects;
@@ -299,15 +300,18 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
         internal::LinearizeEffects(all_data.linear.flights, model.parameters, all_data.free_parameters, model.effects,
                                    context->options.candidates);
     model.kept_fit = internal::FitEffectSubset(model.linearization, KindsOf(mask));
-    const auto implausible = std::find_if(kept->begin(), kept->end(), [&](EffectKind kind) {
-      std::string& why = (*tested)[kind].implausible;
-      why = kind->Implausible(model.effects.Get(kind),
-                              internal::EffectColumns(model.kept_fit, kind, model.kept_fit.std), context->vehicle);
-      if (!why.empty()) why += " (refined on all identification data)";
-      return !why.empty();
+    const auto rejected = std::find_if(kept->begin(), kept->end(), [&](EffectKind kind) {
+      internal::TestedCandidate& t = (*tested)[kind];
+      const Eigen::VectorXd value = model.effects.Get(kind);
+      const Eigen::VectorXd std_dev = internal::EffectColumns(model.kept_fit, kind, model.kept_fit.std);
+      t.implausible = kind->Implausible(value, std_dev, context->vehicle);
+      if (t.implausible.empty()) t.negligible = kind->Negligible(value, std_dev);
+      for (std::string* why : {&t.implausible, &t.negligible})
+        if (!why->empty()) *why += " (refined on all identification data)";
+      return t.Rejected();
     });
-    if (implausible == kept->end()) return model;
-    kept->erase(implausible);
+    if (rejected == kept->end()) return model;
+    kept->erase(rejected);
   }
 }
 

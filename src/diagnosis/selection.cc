@@ -203,8 +203,8 @@ std::vector<Effects> WarmStarts(EffectKind kind, EffectMask selected, const Mode
 
 // Tests each refined candidate on top of `base` and keeps its record; marks the significant ones whose
 // fold-mean value is outside the physical range (they buy their shrink with it, absorbing something
-// else); returns the index of the plausible one with the smallest held-out residual (-1 when there is
-// none).
+// else) or too small to matter; returns the index of the plausible one with the smallest held-out residual (-1 when
+// there is none).
 int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fit, const ModelRecord& base,
                  EffectMask selected, std::vector<ModelRecord> fitted, TestedCandidates* tested,
                  std::vector<std::pair<EffectKind, EffectTest>>* refined) {
@@ -222,11 +222,14 @@ int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fi
     t.test = TestAddedEffects(base.gap, record.gap, to_fit[c]->FreeDimension(context->vehicle), options.alpha,
                               options.min_shrink_pct);
     if (t.step == 1) t.alone = t.test;
-    if (t.test.significant)
-      t.implausible = to_fit[c]->Implausible(MeanFoldEffect(record, to_fit[c]), t.linearized_std, context->vehicle);
+    if (t.test.significant) {
+      const Eigen::VectorXd value = MeanFoldEffect(record, to_fit[c]);
+      t.implausible = to_fit[c]->Implausible(value, t.linearized_std, context->vehicle);
+      if (t.implausible.empty()) t.negligible = to_fit[c]->Negligible(value, t.linearized_std);
+    }
     const double ssr = record.gap.whitened_ssr;
     context->records[record.mask] = std::move(record);
-    if (!t.implausible.empty()) continue;  // neither selected nor a rival of the selected one
+    if (t.Rejected()) continue;  // neither selected nor a rival of the selected one
     refined->emplace_back(to_fit[c], t.test);
     if (best < 0 || ssr < best_ssr) {
       best = static_cast<int>(c);
@@ -278,8 +281,7 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
     std::vector<EffectKind> remaining;
     for (EffectKind kind : options.candidates) {
       const auto t = forward.tested.find(kind);
-      if (!Has(selected, kind) && (t == forward.tested.end() || t->second.implausible.empty()))
-        remaining.push_back(kind);
+      if (!Has(selected, kind) && (t == forward.tested.end() || !t->second.Rejected())) remaining.push_back(kind);
     }
     if (remaining.empty()) break;
     std::vector<EffectKind> to_fit =

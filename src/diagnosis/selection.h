@@ -103,8 +103,11 @@ struct TestedCandidate {
   Eigen::VectorXd linearized_std;    // its std there
   Effects linearized_step;           // that step for every effect of the model (base and candidate)
   // Significant when refined, but with a value outside its physical range
-  // (EffectDescriptor::Implausible): which value and range. Never selected, not tested again.
+  // (EffectDescriptor::Implausible): which value and range; or one too small to matter
+  // (EffectDescriptor::Negligible). Either way never selected, not tested again.
   std::string implausible;
+  std::string negligible;
+  bool Rejected() const { return !implausible.empty() || !negligible.empty(); }
 };
 using TestedCandidates = std::map<EffectKind, TestedCandidate, EffectOrder>;
 
@@ -143,8 +146,8 @@ struct ForwardSelection {
 // Forward selection: at each step the screened candidates are refined on top of the effects
 // selected so far; the one with the smallest held-out residual among those whose fold-mean value is
 // physically plausible is kept while its F-test is significant, up to options.max_effects. A
-// significant candidate with an implausible value is marked (TestedCandidate::implausible) and left
-// out of the later steps.
+// significant candidate with an implausible or negligible value is marked (TestedCandidate::implausible,
+// ::negligible) and left out of the later steps.
 ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& all_data, PhaseTimer* timer);
 
 // Selected by the forward selection, then not significant on top of `others`.

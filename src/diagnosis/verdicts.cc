@@ -92,9 +92,10 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
       v.value = Eigen::VectorXd::Zero(kind->Dimension(context.vehicle));
     v.status = "not significant";
   }
-  if (tested && !t->second.implausible.empty() && !v.selected) {
-    v.status = "implausible";
+  if (tested && t->second.Rejected() && !v.selected) {
+    v.status = t->second.implausible.empty() ? "negligible" : "implausible";
     v.implausible = t->second.implausible;
+    v.negligible = t->second.negligible;
   }
   ApplyKeptStep(outcome.steps, &v);
   ApplyDropped(context, outcome.backward.dropped, &v);

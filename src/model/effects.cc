@@ -158,33 +158,67 @@ double PlausibleScaleOf(PlausibleScale scale, const Vehicle& vehicle) {
 
 }  // namespace
 
+namespace {
+
+double StdAt(const Eigen::VectorXd& std_dev, Eigen::Index k) { return k < std_dev.size() ? std_dev[k] : 0.0; }
+
+// The norm of `value` and its std along the estimate's direction.
+std::pair<double, double> NormAndStd(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) {
+  const double norm = value.norm();
+  double variance = 0.0;
+  for (Eigen::Index k = 0; k < value.size() && norm > 0.0; ++k)
+    variance += std::pow(value[k] / norm * StdAt(std_dev, k), 2);
+  return {norm, std::sqrt(variance)};
+}
+
+constexpr double kRangeStd = 3.0;  // an estimate within 3 std of a range's edge may lie on its side
+
+std::string Shown(const EffectDescriptor& kind, double v) { return kind.Format(Eigen::VectorXd::Constant(1, v), {}); }
+
+}  // namespace
+
 std::string EffectDescriptor::Implausible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev,
                                           const Vehicle& vehicle) const {
   const PlausibleRange& range = info_.plausible;
   const double scale = PlausibleScaleOf(range.scale, vehicle);
   const double low = range.low * scale, high = range.high * scale;
-  auto sd = [&](Eigen::Index k) { return k < std_dev.size() ? std_dev[k] : 0.0; };
-  constexpr double kStd = 3.0;  // an estimate within 3 std of the range may lie inside it
-  auto shown = [&](double v) { return Format(Eigen::VectorXd::Constant(1, v), {}); };
   const std::string because = range.why.empty() ? "" : ": " + range.why;
   if (range.per_coordinate) {
     const std::vector<std::string> labels = Labels(static_cast<int>(value.size()));
     for (Eigen::Index k = 0; k < value.size(); ++k)
-      if (value[k] < low - kStd * sd(k) || value[k] > high + kStd * sd(k))
+      if (value[k] < low - kRangeStd * StdAt(std_dev, k) || value[k] > high + kRangeStd * StdAt(std_dev, k))
         return (value.size() == 1 ? info_.parameter_name : labels[static_cast<size_t>(k)]) + " = " +
                Format(value.segment(k, 1),
                       std_dev.size() > k ? Eigen::VectorXd(std_dev.segment(k, 1)) : Eigen::VectorXd()) +
-               " is outside its physical range [" + (std::isfinite(low) ? shown(low) : "-inf") + ", " +
-               (std::isfinite(high) ? shown(high) : "inf") + "]" + because;
+               " is outside its physical range [" + (std::isfinite(low) ? Shown(*this, low) : "-inf") + ", " +
+               (std::isfinite(high) ? Shown(*this, high) : "inf") + "]" + because;
     return {};
   }
-  const double norm = value.norm();
-  double norm_std = 0.0;  // along the estimate's direction
-  for (Eigen::Index k = 0; k < value.size() && norm > 0.0; ++k) norm_std += std::pow(value[k] / norm * sd(k), 2);
-  if (norm > high + kStd * std::sqrt(norm_std))
-    return info_.parameter_name + " = " + Format(value, std_dev) + " (norm " + shown(norm) +
-           ") is outside its physical range (norm <= " + shown(high) + ")" + because;
+  const auto [norm, norm_std] = NormAndStd(value, std_dev);
+  if (norm > high + kRangeStd * norm_std)
+    return info_.parameter_name + " = " + Format(value, std_dev) + " (norm " + Shown(*this, norm) +
+           ") is outside its physical range (norm <= " + Shown(*this, high) + ")" + because;
   return {};
+}
+
+std::string EffectDescriptor::Negligible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const {
+  const PlausibleRange& range = info_.plausible;
+  const double floor = info_.negligible.below;
+  if (floor <= 0.0) return {};
+  Eigen::VectorXd free = value;  // held coordinates are not estimated
+  for (int k : info_.held_coordinates)
+    if (k < free.size()) free[k] = 0.0;
+  double upper = 0.0;  // the estimate's size plus 3 std
+  if (range.per_coordinate) {
+    for (Eigen::Index k = 0; k < free.size(); ++k)
+      upper = std::max(upper, std::abs(free[k]) + kRangeStd * StdAt(std_dev, k));
+  } else {
+    const auto [norm, norm_std] = NormAndStd(free, std_dev);
+    upper = norm + kRangeStd * norm_std;
+  }
+  if (upper >= floor) return {};
+  return info_.parameter_name + " = " + Format(value, std_dev) + " is below " + Shown(*this, floor) +
+         (range.per_coordinate ? " in every coordinate" : " in norm") + " (3 std included): " + info_.negligible.why;
 }
 
 Eigen::VectorXd EffectDescriptor::Clamp(const Eigen::VectorXd& value) const {

@@ -99,8 +99,9 @@ TEST(EffectsTest, PhysicalRangesScaleWithTheVehicleAndAllowThreeStd) {
   const Eigen::Vector3d arm(-0.1, 0.0, 0.0);
   EXPECT_EQ(lever_arm->Implausible(arm, {}, b.vehicle), "");
   const std::string why = lever_arm->Implausible(arm, {}, cf.vehicle);
-  EXPECT_NE(why.find("imu_position_m = (-100, 0, 0 held) mm (norm 100 mm) is outside its physical range (norm <= 46 mm)"),
-            std::string::npos)
+  EXPECT_NE(
+      why.find("imu_position_m = (-100, 0, 0 held) mm (norm 100 mm) is outside its physical range (norm <= 46 mm)"),
+      std::string::npos)
       << why;
   // 3 std of slack: 0.2 +- 0.04 is within 3 std of 0.1, 0.2 +- 0.03 is not.
   const EffectKind scale = ParseEffectKind("rotor_thrust_scale");
@@ -113,6 +114,29 @@ TEST(EffectsTest, PhysicalRangesScaleWithTheVehicleAndAllowThreeStd) {
   const EffectKind inertia = ParseEffectKind("rotor_inertia");
   EXPECT_EQ(inertia->Implausible(Eigen::VectorXd::Constant(1, 1e-5), {}, b.vehicle), "");
   EXPECT_NE(inertia->Implausible(Eigen::VectorXd::Constant(1, 1e-5), {}, cf.vehicle), "");
+}
+
+// A lever arm whose x, y norm is below 1 mm with 3 std is negligible; its held z does not count, and
+// an estimate whose 3 std reach the floor is not. Effects without a floor are never negligible, and
+// the simulator's smallest realistic draw of an effect with one is above it.
+TEST(EffectsTest, ASubMillimetreLeverArmIsNegligible) {
+  const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
+  const Eigen::Vector3d std_dev(0.1e-3, 0.1e-3, 0.0);
+  const std::string why = lever_arm->Negligible(Eigen::Vector3d(0.3e-3, -0.4e-3, 0.02), std_dev);
+  EXPECT_EQ(why.rfind("imu_position_m = (0.3 +- 0.1, -0.4 +- 0.1, 20 held) mm is below 1 mm in norm (3 std included): "
+                      "an IMU's position is known to about a millimetre",
+                      0),
+            0u)
+      << why;
+  EXPECT_EQ(lever_arm->Negligible(Eigen::Vector3d(0.3e-3, -0.4e-3, 0.0), 2.0 * std_dev), "");  // 0.5 + 3 x 0.2 mm
+  EXPECT_EQ(lever_arm->Negligible(Eigen::Vector3d(1.1e-3, 0.0, 0.0), {}), "");
+  const DrawRange& draw = lever_arm->info().draw;
+  EXPECT_GT(draw.low * draw.to_si, lever_arm->info().negligible.below);
+  for (EffectKind kind : AllEffects()) {
+    if (kind->info().negligible.below != 0.0) continue;
+    EXPECT_EQ(kind->Negligible(Eigen::VectorXd::Zero(kind->Dimension(PresetVehicle("B").vehicle)), {}), "")
+        << kind->name();
+  }
 }
 
 // An effect that needs an input a log lacks is unavailable, with the reason.

@@ -109,7 +109,9 @@ struct EffectVerdict {
   EffectKind kind = nullptr;
   // "selected", "confounded" (significant alone, but indistinguishable from a selected effect),
   // "implausible" (significant, but only with a value outside its physical range: it absorbs something
-  // else, and is never selected; `implausible` says which value and range), "not significant", or
+  // else, and is never selected; `implausible` says which value and range), "negligible" (significant,
+  // but with a value below the size that matters for that effect: never selected; `negligible` says
+  // which), "not significant", or
   // "unavailable" (a flight lacks an input it needs: `note` says which).
   std::string status;
   bool selected = false;
@@ -137,6 +139,8 @@ struct EffectVerdict {
   std::string bound_note;
   // Status "implausible": which value lies outside which physical range (also in `note`).
   std::string implausible;
+  // Status "negligible": which value lies below which size, and why that size (also in `note`).
+  std::string negligible;
 };
 
 struct ConfoundedEffects {

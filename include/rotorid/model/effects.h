@@ -142,6 +142,15 @@ struct PlausibleRange {
   PlausibleScale scale = PlausibleScale::kNone;
   std::string why;  // the physics, for the note: "an IMU sits on the frame, within an arm of O_d"
 };
+// Sizes too small to matter: an estimate below it (SI, not scaled; per coordinate or the norm, as
+// its PlausibleRange says), 3 std included, is negligible however significant, because a value that
+// small is what the data's own small misfits look like through this effect (a sub-millimetre lever
+// arm is the first moment the force rows see less the one the moment rows see). Set where such
+// selections were measured, with the reason; 0 for none.
+struct NegligibleSize {
+  double below = 0.0;
+  std::string why;
+};
 
 class EffectDescriptor {
  public:
@@ -171,6 +180,7 @@ class EffectDescriptor {
     DrawRange draw;
     SimulatorLimit simulator_limit;
     PlausibleRange plausible;
+    NegligibleSize negligible;
     // Change between refinement passes below which it has settled when no std is computed: a
     // hundredth of the smallest sizes a 90 s flight reveals (refinement study).
     double settle_tolerance = 0.0;
@@ -232,6 +242,9 @@ class EffectDescriptor {
   // Empty when an estimate (value +- std_dev, std_dev may be empty) is within the physical range for
   // this vehicle, allowing 3 std beyond it; else which value lies outside which range, and why.
   std::string Implausible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev, const Vehicle& vehicle) const;
+  // Empty unless the estimate's free coordinates, 3 std included, lie below the size that matters
+  // (Info::negligible); else the value, that size, and why.
+  std::string Negligible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const;
   // Clamps a value into the physical bounds.
   Eigen::VectorXd Clamp(const Eigen::VectorXd& value) const;
 
