@@ -36,7 +36,8 @@ std::vector<const T*> Pointers(const std::vector<VectorT<T>>& values) {
 EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, const std::vector<EffectKind>& free,
                        const EffectiveRotor* rotor)
     : flight_(flight), rotor_(rotor) {
-  for (auto [stage, out] : {std::pair{EffectStage::kImuSensor, &imu_}, std::pair{EffectStage::kRotorWrench, &wrench_}}) {
+  for (auto [stage, out] :
+       {std::pair{EffectStage::kImuSensor, &imu_}, std::pair{EffectStage::kRotorWrench, &wrench_}}) {
     out->chain = ActingEffects(effects, stage, free);
     for (EffectKind kind : out->chain.kinds) {
       const auto it = std::find(free.begin(), free.end(), kind);
@@ -91,6 +92,7 @@ Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, size_t fir
 
 template Eigen::Matrix<double, 6, kNumIdimColumns> EffectRows::Rows<double>(int, size_t) const;
 template Eigen::Matrix<ImuJet, 6, kNumIdimColumns> EffectRows::Rows<ImuJet>(int, size_t) const;
+template Eigen::Matrix<MidImuJet, 6, kNumIdimColumns> EffectRows::Rows<MidImuJet>(int, size_t) const;
 template Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> EffectRows::Rows<WideImuJet>(int, size_t) const;
 
 }  // namespace rotorid::internal
