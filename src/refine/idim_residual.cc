@@ -144,8 +144,9 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
   size_t last_coordinate = first_coordinate;
   if constexpr (!std::is_same_v<T, double>)
     last_coordinate = std::min(coordinates.size(), first_coordinate + T::DIMENSION);
+  const EffectRows::PassValues<T> pass = point.rows->Pass<T>(first_coordinate);
   for (int s = 0; s < count_; ++s) {
-    const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, first_coordinate);
+    const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, pass);
     for (int c = 0; c < 6; ++c) {
       const int out = 6 * s + c;
       const double gain = point.rotor->gain[c];
