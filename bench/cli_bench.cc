@@ -8,7 +8,8 @@
 //
 //   cli_bench [runs=5] [--long] [--identify-only] [--baseline /path/to/old/rotorid]
 //   (--long adds the 1 h log: about a minute to simulate, once; identify on it, and refine unless
-//   --identify-only; --identify-only skips refine, delay, ablate and diagnose)
+//   --identify-only; --identify-only skips refine, delay, ablate and diagnose. The diagnosis with
+//   every candidate also runs on the real Crazyflie flight jana01 when ../shared/data/real holds it.)
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -99,6 +100,8 @@ int main(int argc, char** argv) {
   Run({rotorid, "simulate", "--preset", "B", "--seconds", "90", "--seed", "3", "--effect", "delay_s=0.015", "--effect",
        "motor_tau_s=0.03", "--out", path("b90.csv"), "--vehicle-out", path("b.yaml"), "--quiet"});
   Run({rotorid, "simulate", "--preset", "B", "--seconds", "30", "--seed", "4", "--out", path("b30.csv"), "--quiet"});
+  Run({rotorid, "simulate", "--preset", "B", "--seconds", "90", "--seed", "6", "--effect", "motor_tau_s=0.03", "--out",
+       path("b90_lag.csv"), "--quiet"});
   if (long_log && !std::filesystem::exists(path("b3600.csv")))  // the same seed gives the same log
     Run({rotorid, "simulate", "--preset", "B", "--seconds", "3600", "--seed", "5", "--out", path("b3600.csv"),
          "--quiet"});
@@ -116,9 +119,23 @@ int main(int argc, char** argv) {
                      with({rotorid, "refine", "--effects", "delay,motor_lag,acc_bias,gyro_bias,misalignment"}, flight),
                      runs});
     cases.push_back({"delay, 90 s log", with({rotorid, "delay"}, flight), runs});
-    cases.push_back({"ablate, 5 effects (32 subsets), 90 s log", with({rotorid, "ablate", "--threads", "2"}, flight),
-                     std::min(runs, 3)});
+    cases.push_back(
+        {"ablate, 5 effects (32 subsets), 90 s log",
+         with({rotorid, "ablate", "--threads", "2", "--effects", "delay,motor_lag,acc_bias,gyro_bias,misalignment"},
+              flight),
+         std::min(runs, 3)});
     cases.push_back({"diagnose, 90 s log", with({rotorid, "diagnose"}, flight), runs});
+    cases.push_back(
+        {"diagnose --effects every, 90 s log, one effect",
+         {rotorid, "diagnose", "--effects", "every", "--vehicle", path("b.yaml"), "--log", path("b90_lag.csv")},
+         runs});
+    const std::string source = ROTORID_SOURCE_DIR;
+    const std::string jana01 = source + "/../shared/data/real/crazyflie-imrc-rpm/brushed/raw/jana01";
+    if (std::filesystem::exists(jana01))  // a minute or two per run before issue 14: three runs
+      cases.push_back({"diagnose --effects every, jana01 (real, 51 s at 500 Hz)",
+                       {rotorid, "diagnose", "--effects", "every", "--allow-partial", "--vehicle",
+                        source + "/data/vehicles/crazyflie21_brushed.yaml", "--log", jana01},
+                       std::min(runs, 3)});
   }
   if (long_log) {
     const std::vector<std::string> long_flight = {"--vehicle", path("b.yaml"), "--log", path("b3600.csv")};

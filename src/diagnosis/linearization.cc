@@ -125,8 +125,9 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     std::vector<int> column_of(static_cast<size_t>(p));
     for (Eigen::Index c = 0; c < p; ++c) column_of[static_cast<size_t>(c)] = ColumnOf(free_parameters[c], flight);
     const Eigen::Index kept = (samples + stride - 1) / stride;
+    const EffectRows::PassValues<double> pass = values.Pass<double>();
     for (int r = 0; r < samples; ++r) {
-      const Eigen::Matrix<double, 6, kNumIdimColumns> w = values.Rows<double>(r);
+      const Eigen::Matrix<double, 6, kNumIdimColumns> w = values.Rows<double>(r, pass);
       rho.col(r) = w * chi_t;
       rotor_wrench.col(r) = w.leftCols<2>() * chi_t.head<2>();
       if (r % stride != 0) continue;

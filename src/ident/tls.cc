@@ -435,12 +435,7 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
       }
       scores.col(t) -= r_sq * c;
     }
-    s += scores * scores.transpose();
-    for (int l = 1; l <= lag && l < samples; ++l) {
-      const double w_l = 1.0 - static_cast<double>(l) / (lag + 1);
-      const Eigen::MatrixXd cross = scores.leftCols(samples - l) * scores.rightCols(samples - l).transpose();
-      s += w_l * (cross + cross.transpose());
-    }
+    s += BartlettLongRunSum(scores, lag);
     begin = end;
   }
   const Eigen::MatrixXd h_inv = h.ldlt().solve(Eigen::MatrixXd::Identity(n - 1, n - 1));

@@ -39,6 +39,7 @@ class ImuEffect final : public EffectDescriptor {
   }
   void CorrectImu(const double* p, ImuSample<double>* s) const override { Model::Correct(p, s); }
   void CorrectImu(const ImuJet* p, ImuSample<ImuJet>* s) const override { Model::Correct(p, s); }
+  void CorrectImu(const MidImuJet* p, ImuSample<MidImuJet>* s) const override { Model::Correct(p, s); }
   void CorrectImu(const WideImuJet* p, ImuSample<WideImuJet>* s) const override { Model::Correct(p, s); }
   void ApplyToSensor(const double* p, ImuSample<double>* s) const override { Model::ApplyToSensor(p, s); }
 };
@@ -81,6 +82,10 @@ class RotorWrenchEffect final : public EffectDescriptor {
     Model::Add(p, s, t);
   }
   void AddRotorWrench(const ImuJet* p, const RotorSample<ImuJet>& s, RotorWrenchTerms<ImuJet>* t) const override {
+    Model::Add(p, s, t);
+  }
+  void AddRotorWrench(const MidImuJet* p, const RotorSample<MidImuJet>& s,
+                      RotorWrenchTerms<MidImuJet>* t) const override {
     Model::Add(p, s, t);
   }
   void AddRotorWrench(const WideImuJet* p, const RotorSample<WideImuJet>& s,

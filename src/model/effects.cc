@@ -227,6 +227,7 @@ Eigen::VectorXd EffectDescriptor::Clamp(const Eigen::VectorXd& value) const {
 
 void EffectDescriptor::CorrectImu(const double*, ImuSample<double>*) const { NotOfStage(*this, "IMU model"); }
 void EffectDescriptor::CorrectImu(const ImuJet*, ImuSample<ImuJet>*) const { NotOfStage(*this, "IMU model"); }
+void EffectDescriptor::CorrectImu(const MidImuJet*, ImuSample<MidImuJet>*) const { NotOfStage(*this, "IMU model"); }
 void EffectDescriptor::CorrectImu(const WideImuJet*, ImuSample<WideImuJet>*) const { NotOfStage(*this, "IMU model"); }
 void EffectDescriptor::ApplyToSensor(const double*, ImuSample<double>*) const { NotOfStage(*this, "sensor model"); }
 void EffectDescriptor::TransformRotorSignal(const double*, const RotorSignalInput&, const Eigen::VectorXd&,
@@ -243,6 +244,10 @@ void EffectDescriptor::AddRotorWrench(const double*, const RotorSample<double>&,
   NotOfStage(*this, "rotor-wrench model");
 }
 void EffectDescriptor::AddRotorWrench(const ImuJet*, const RotorSample<ImuJet>&, RotorWrenchTerms<ImuJet>*) const {
+  NotOfStage(*this, "rotor-wrench model");
+}
+void EffectDescriptor::AddRotorWrench(const MidImuJet*, const RotorSample<MidImuJet>&,
+                                      RotorWrenchTerms<MidImuJet>*) const {
   NotOfStage(*this, "rotor-wrench model");
 }
 void EffectDescriptor::AddRotorWrench(const WideImuJet*, const RotorSample<WideImuJet>&,

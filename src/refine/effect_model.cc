@@ -134,7 +134,8 @@ Eigen::MatrixXd BuildIdimMatrixWithEffects(const ProcessedFlight& flight, const 
   const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
   const internal::EffectRows rows(&flight, effects, {}, &rotor);
   Eigen::MatrixXd w(6 * flight.num_rows_samples(), kNumIdimColumns);
-  for (int r = 0; r < flight.num_rows_samples(); ++r) w.middleRows<6>(6 * r) = rows.Rows<double>(r);
+  const internal::EffectRows::PassValues<double> pass = rows.Pass<double>();
+  for (int r = 0; r < flight.num_rows_samples(); ++r) w.middleRows<6>(6 * r) = rows.Rows<double>(r, pass);
   return w;
 }
 

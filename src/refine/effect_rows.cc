@@ -36,7 +36,8 @@ std::vector<const T*> Pointers(const std::vector<VectorT<T>>& values) {
 EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, const std::vector<EffectKind>& free,
                        const EffectiveRotor* rotor)
     : flight_(flight), rotor_(rotor) {
-  for (auto [stage, out] : {std::pair{EffectStage::kImuSensor, &imu_}, std::pair{EffectStage::kRotorWrench, &wrench_}}) {
+  for (auto [stage, out] :
+       {std::pair{EffectStage::kImuSensor, &imu_}, std::pair{EffectStage::kRotorWrench, &wrench_}}) {
     out->chain = ActingEffects(effects, stage, free);
     for (EffectKind kind : out->chain.kinds) {
       const auto it = std::find(free.begin(), free.end(), kind);
@@ -58,8 +59,22 @@ EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, co
 }
 
 template <typename T>
-Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, size_t first) const {
+EffectRows::PassValues<T> EffectRows::Pass(size_t first) const {
+  size_t last = first;
+  if constexpr (!std::is_same_v<T, double>) last = std::min(coordinates_.size(), first + T::DIMENSION);
+  PassValues<T> pass;
+  pass.first = first;
+  pass.imu = StageValues<T>(imu_.chain, imu_.free_index, coordinates_, first, last);
+  pass.wrench = StageValues<T>(wrench_.chain, wrench_.free_index, coordinates_, first, last);
+  pass.imu_pointers = Pointers(pass.imu);
+  pass.wrench_pointers = Pointers(pass.wrench);
+  return pass;
+}
+
+template <typename T>
+Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, const PassValues<T>& pass) const {
   const int rotors = flight_->vehicle.num_rotors();
+  const size_t first = pass.first;
   size_t last = first;
   if constexpr (!std::is_same_v<T, double>) last = std::min(coordinates_.size(), first + T::DIMENSION);
   VectorT<T> omega(rotors), omega_rate(rotors);
@@ -76,21 +91,24 @@ Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, size_t fir
         }
   const int i = flight_->row_samples[row_sample];
   ImuSample<T> imu = LoggedImu<T>(*flight_, i);
-  const std::vector<VectorT<T>> imu_values = StageValues<T>(imu_.chain, imu_.free_index, coordinates_, first, last);
-  CorrectImu<T>(imu_.chain.kinds, Pointers(imu_values), &imu);
+  CorrectImu<T>(imu_.chain.kinds, pass.imu_pointers, &imu);
   Eigen::Matrix<T, 6, kNumIdimColumns> rows =
       IdimRows<T>(imu.angular_velocity, imu.angular_acceleration, imu.specific_force, omega, flight_->vehicle);
   if (wrench_.chain.kinds.empty()) return rows;
   RotorSample<T> sample = FlightRotorSample<T>(*flight_, i, omega, omega_rate, imu.angular_velocity);
-  const std::vector<VectorT<T>> values = StageValues<T>(wrench_.chain, wrench_.free_index, coordinates_, first, last);
   RotorWrenchTerms<T> terms(rotors);
-  AddRotorWrench<T>(wrench_.chain.kinds, Pointers(values), sample, &terms);
+  AddRotorWrench<T>(wrench_.chain.kinds, pass.wrench_pointers, sample, &terms);
   ApplyRotorWrenchTerms<T>(omega, flight_->vehicle, terms, &rows);
   return rows;
 }
 
-template Eigen::Matrix<double, 6, kNumIdimColumns> EffectRows::Rows<double>(int, size_t) const;
-template Eigen::Matrix<ImuJet, 6, kNumIdimColumns> EffectRows::Rows<ImuJet>(int, size_t) const;
-template Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> EffectRows::Rows<WideImuJet>(int, size_t) const;
+#define ROTORID_EFFECT_ROWS_OF(T)                                       \
+  template EffectRows::PassValues<T> EffectRows::Pass<T>(size_t) const; \
+  template Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows<T>(int, const PassValues<T>&) const;
+ROTORID_EFFECT_ROWS_OF(double)
+ROTORID_EFFECT_ROWS_OF(ImuJet)
+ROTORID_EFFECT_ROWS_OF(MidImuJet)
+ROTORID_EFFECT_ROWS_OF(WideImuJet)
+#undef ROTORID_EFFECT_ROWS_OF
 
 }  // namespace rotorid::internal

@@ -30,10 +30,25 @@ class EffectRows {
   };
   const std::vector<Coordinate>& coordinates() const { return coordinates_; }
 
-  // The 6 rows of row sample `row_sample`; with T a Jet, its slot k is the derivative with respect
-  // to coordinate first + k (those beyond the last coordinate stay zero).
+  // The effects' values of one pass over the row samples (scalar type T, Jet slots from coordinate
+  // `first`): the same at every row sample, so built once per pass rather than per row.
   template <typename T>
-  Eigen::Matrix<T, 6, kNumIdimColumns> Rows(int row_sample, size_t first = 0) const;
+  struct PassValues {
+    size_t first = 0;
+    std::vector<Eigen::Matrix<T, Eigen::Dynamic, 1>> imu, wrench;
+    std::vector<const T*> imu_pointers, wrench_pointers;  // into imu and wrench
+  };
+  template <typename T>
+  PassValues<T> Pass(size_t first = 0) const;
+
+  // The 6 rows of row sample `row_sample`; with T a Jet, its slot k is the derivative with respect
+  // to coordinate pass.first + k (those beyond the last coordinate stay zero).
+  template <typename T>
+  Eigen::Matrix<T, 6, kNumIdimColumns> Rows(int row_sample, const PassValues<T>& pass) const;
+  template <typename T>
+  Eigen::Matrix<T, 6, kNumIdimColumns> Rows(int row_sample, size_t first = 0) const {
+    return Rows<T>(row_sample, Pass<T>(first));
+  }
 
  private:
   const ProcessedFlight* flight_;

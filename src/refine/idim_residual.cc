@@ -1,9 +1,9 @@
 #include "refine/idim_residual.h"
 
+#include <glog/logging.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <glog/logging.h>
 
 #include "refine/effect_rows.h"
 #include "rotorid/ident/tls.h"
@@ -29,8 +29,8 @@ Eigen::MatrixXd CentredRotorMoments(const RotorMomentAnchor& anchor, const Eigen
 
 }  // namespace
 
-RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSystem& system, int index,
-                                     int first_row, const Eigen::VectorXd& chi) {
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSystem& system, int index, int first_row,
+                                     const Eigen::VectorXd& chi) {
   RotorMomentAnchor anchor;
   const int rotors = flight.vehicle.num_rotors();
   anchor.unit = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, rotors);
@@ -144,8 +144,9 @@ void IdimResidualBlock::EvaluatePass(const Point& point, size_t first_coordinate
   size_t last_coordinate = first_coordinate;
   if constexpr (!std::is_same_v<T, double>)
     last_coordinate = std::min(coordinates.size(), first_coordinate + T::DIMENSION);
+  const EffectRows::PassValues<T> pass = point.rows->Pass<T>(first_coordinate);
   for (int s = 0; s < count_; ++s) {
-    const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, first_coordinate);
+    const Eigen::Matrix<T, 6, kNumIdimColumns> rows = point.rows->Rows<T>(first_ + s, pass);
     for (int c = 0; c < 6; ++c) {
       const int out = 6 * s + c;
       const double gain = point.rotor->gain[c];
@@ -200,6 +201,8 @@ bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residu
     EvaluatePass<double>(point, 0, residuals, jacobians);
   } else if (coordinates <= static_cast<size_t>(kImuJetSize)) {
     EvaluatePass<ImuJet>(point, 0, residuals, jacobians);
+  } else if (coordinates <= static_cast<size_t>(kMidImuJetSize)) {
+    EvaluatePass<MidImuJet>(point, 0, residuals, jacobians);
   } else {
     for (size_t first = 0; first < coordinates; first += kWideImuJetSize)
       EvaluatePass<WideImuJet>(point, first, residuals, jacobians);

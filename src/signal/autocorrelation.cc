@@ -41,4 +41,23 @@ double AutocorrelationFactor(const std::vector<Eigen::VectorXd>& series, Eigen::
   return std::max(factor, 1.0);
 }
 
+Eigen::MatrixXd BartlettLongRunSum(const Eigen::MatrixXd& scores, Eigen::Index lag) {
+  // The lagged terms are scores * V^T with V_t = sum_l (lag + 1 - l) s_{t+l} / (lag + 1): one
+  // product instead of one per lag (those were most of a refinement's reselection passes). V is
+  // built from the end by a sliding window: A_t = sum_l (lag + 1 - l) s_{t+l} and the window sum
+  // B_t = sum_l s_{t+l} (l = 1..lag, zero past the last sample) give A_{t-1} = A_t + lag s_t - B_t.
+  const Eigen::Index n = scores.rows(), samples = scores.cols();
+  Eigen::MatrixXd weighted_ahead(n, samples);
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(n), b = Eigen::VectorXd::Zero(n);
+  const double lag_d = static_cast<double>(lag);
+  for (Eigen::Index t = samples - 1; t >= 0; --t) {
+    weighted_ahead.col(t) = a / (lag_d + 1.0);
+    a += lag_d * scores.col(t) - b;
+    b += scores.col(t);
+    if (t + lag < samples) b -= scores.col(t + lag);
+  }
+  const Eigen::MatrixXd lagged = scores * weighted_ahead.transpose();
+  return scores * scores.transpose() + lagged + lagged.transpose();
+}
+
 }  // namespace rotorid

@@ -51,5 +51,26 @@ TEST(AutocorrelationTest, SearchCapLimitsTheWindowOfSlowlyDecorrelatingSeries) {
   EXPECT_EQ(AutocorrelationFactor({slow.head(19)}), 1.0);
 }
 
+// The sliding-window form equals the definition, one product per lag, to round-off: correlated
+// scores (three AR(1) rows), lags from none to beyond the samples.
+TEST(AutocorrelationTest, BartlettLongRunSumIsThePerLagSum) {
+  const int samples = 300;
+  Eigen::MatrixXd scores(3, samples);
+  for (int k = 0; k < 3; ++k) scores.row(k) = Ar1Noise(0.3 * k, samples, 20 + k).transpose();
+  scores.row(2) += 0.5 * scores.row(0);
+  for (int lag : {0, 1, 7, 60, 299, 400}) {
+    Eigen::MatrixXd expected = scores * scores.transpose();
+    for (int l = 1; l <= lag && l < samples; ++l) {
+      const Eigen::MatrixXd cross = scores.leftCols(samples - l) * scores.rightCols(samples - l).transpose();
+      expected += (1.0 - static_cast<double>(l) / (lag + 1)) * (cross + cross.transpose());
+    }
+    const Eigen::MatrixXd sum = BartlettLongRunSum(scores, lag);
+    EXPECT_LT((sum - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff()) << "lag " << lag;
+  }
+  // The lagged terms matter: with lag 60 the sum differs from the lag-0 one by a sizeable amount.
+  EXPECT_GT((BartlettLongRunSum(scores, 60) - BartlettLongRunSum(scores, 0)).norm(),
+            0.1 * BartlettLongRunSum(scores, 0).norm());
+}
+
 }  // namespace
 }  // namespace rotorid

@@ -22,4 +22,8 @@ Eigen::Index FirstLagBelow(const std::vector<Eigen::VectorXd>& series, double th
 double AutocorrelationFactor(const std::vector<Eigen::VectorXd>& series,
                              Eigen::Index max_search_lag = std::numeric_limits<Eigen::Index>::max());
 
+// The Newey-West long-run sum of the columns s_t of `scores` (one column per sample):
+// sum_t s_t s_t^T + sum_{l=1..lag} (1 - l/(lag+1)) (C_l + C_l^T), C_l = sum_t s_t s_{t+l}^T.
+Eigen::MatrixXd BartlettLongRunSum(const Eigen::MatrixXd& scores, Eigen::Index lag);
+
 }  // namespace rotorid
