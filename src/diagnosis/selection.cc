@@ -203,8 +203,8 @@ std::vector<Effects> WarmStarts(EffectKind kind, EffectMask selected, const Mode
 
 // Tests each refined candidate on top of `base` and keeps its record; marks the significant ones whose
 // fold-mean value is outside the physical range (they buy their shrink with it, absorbing something
-// else) or too small to matter; returns the index of the plausible one with the smallest held-out residual (-1 when
-// there is none).
+// else) or too small to matter; returns the index of the plausible one with the smallest held-out
+// residual (-1 when there is none).
 int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fit, const ModelRecord& base,
                  EffectMask selected, std::vector<ModelRecord> fitted, TestedCandidates* tested,
                  std::vector<std::pair<EffectKind, EffectTest>>* refined) {

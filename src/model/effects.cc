@@ -156,10 +156,6 @@ double PlausibleScaleOf(PlausibleScale scale, const Vehicle& vehicle) {
   return 1.0;
 }
 
-}  // namespace
-
-namespace {
-
 double StdAt(const Eigen::VectorXd& std_dev, Eigen::Index k) { return k < std_dev.size() ? std_dev[k] : 0.0; }
 
 // The norm of `value` and its std along the estimate's direction.

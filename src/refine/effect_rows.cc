@@ -60,12 +60,11 @@ EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, co
 
 template <typename T>
 EffectRows::PassValues<T> EffectRows::Pass(size_t first) const {
-  size_t last = first;
-  if constexpr (!std::is_same_v<T, double>) last = std::min(coordinates_.size(), first + T::DIMENSION);
   PassValues<T> pass;
-  pass.first = first;
-  pass.imu = StageValues<T>(imu_.chain, imu_.free_index, coordinates_, first, last);
-  pass.wrench = StageValues<T>(wrench_.chain, wrench_.free_index, coordinates_, first, last);
+  pass.first = pass.last = first;
+  if constexpr (!std::is_same_v<T, double>) pass.last = std::min(coordinates_.size(), first + T::DIMENSION);
+  pass.imu = StageValues<T>(imu_.chain, imu_.free_index, coordinates_, first, pass.last);
+  pass.wrench = StageValues<T>(wrench_.chain, wrench_.free_index, coordinates_, first, pass.last);
   pass.imu_pointers = Pointers(pass.imu);
   pass.wrench_pointers = Pointers(pass.wrench);
   return pass;
@@ -74,9 +73,7 @@ EffectRows::PassValues<T> EffectRows::Pass(size_t first) const {
 template <typename T>
 Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, const PassValues<T>& pass) const {
   const int rotors = flight_->vehicle.num_rotors();
-  const size_t first = pass.first;
-  size_t last = first;
-  if constexpr (!std::is_same_v<T, double>) last = std::min(coordinates_.size(), first + T::DIMENSION);
+  const size_t first = pass.first, last = pass.last;
   VectorT<T> omega(rotors), omega_rate(rotors);
   for (int k = 0; k < rotors; ++k) {
     omega[k] = T(rotor_->speed(row_sample, k));

@@ -34,7 +34,7 @@ class EffectRows {
   // `first`): the same at every row sample, so built once per pass rather than per row.
   template <typename T>
   struct PassValues {
-    size_t first = 0;
+    size_t first = 0, last = 0;  // the coordinates [first, last) whose derivatives this pass carries
     std::vector<Eigen::Matrix<T, Eigen::Dynamic, 1>> imu, wrench;
     std::vector<const T*> imu_pointers, wrench_pointers;  // into imu and wrench
   };
