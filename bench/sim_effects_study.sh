@@ -14,6 +14,8 @@
 # MODE=diagnose runs the blind diagnosis instead (`rotorid diagnose --effects $CANDIDATES`, every
 # registered effect by default) and judges it with bench/diagnosis_check.py: the withheld effect
 # ranked first, the withheld ones selected, nothing else; magnitudes with the same tolerances.
+# The `clean` cases (no effect, every candidate's inputs logged) only run in diagnose mode: a false
+# alarm is any selection, e.g. `bench/sim_effects_study.sh R "$(seq -s' ' 101 120)" OUT CF clean diagnose`.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 R=${1:-build/release/apps/rotorid}
@@ -53,6 +55,8 @@ CASES=(
   "CF|battery,motor_lag|battery_exponent=1.0 motor_tau_s=0.03|--battery"
   "CF|rotor_inertia,imu_lever_arm|rotor_inertia=5e-8 imu_lever_arm=0.01,-0.005,0.005|--profile yaw-spin|--allow-partial"
   "CF|ground_effect,rotor_thrust_scale|ground_effect=1.0 rotor_thrust_scale=0.03,-0.02,-0.03,0.02|--profile takeoff-landing"
+  "A|clean||--battery"
+  "CF|clean||--battery"
 )
 
 check() {  # check LABEL REPORT TRUTH SECONDS
@@ -63,6 +67,7 @@ for c in "${CASES[@]}"; do
   IFS='|' read -r vehicle effects assigns simopts refineopts <<<"$c"
   case " $VEHICLES " in *" $vehicle "*) ;; *) continue ;; esac
   [ -z "$MATCH" ] || grep -qE -- "$MATCH" <<<"$c" || continue
+  [ "$effects" != clean ] || [ "$MODE" = diagnose ] || continue
   seconds=60; [ "$vehicle" = CF ] && seconds=40
   for seed in $SEEDS; do
     base="$OUT/${vehicle}_${effects//,/+}_s$seed"

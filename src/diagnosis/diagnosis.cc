@@ -261,20 +261,20 @@ RefineResult RefineOnAllData(const IdentificationResult& full, const ModelRecord
   refine.initial = internal::MeanFoldEffects(kept);
   refine.coarse_delay_search = false;
   refine.delay_search = options.delay_search;
-  refine.compute_covariance = false;
-  refine.num_threads = options.num_threads;
+  refine.num_threads = options.num_threads;  // with the covariance: the physical checks need the std
   return Refine(full, refine);
 }
 
 // The final model on all identification data and the criterion linearised there (std, detectable
-// sizes). A kept effect whose final value lies outside its physical range (or below the size that
-// matters) is marked implausible (negligible) in `tested` and dropped from `kept`, and the rest
-// refined again: the fold fits can be plausible while the fit on all data runs off (an IMU lever arm
-// to its 300 mm bound on top of an acc bias).
+// sizes). A kept effect whose final value lies outside its physical range or on a bound of its
+// refinement (or below the size that matters) is marked implausible (negligible) in `tested` and
+// dropped from `kept`, and the rest refined again: the fold fits can be plausible while the fit on
+// all data runs off (an IMU lever arm to its 300 mm bound on top of an acc bias, a z acc bias to its
+// 2 m/s^2 bound on a PWM-driven Crazyflie): a clipped value is not an estimate.
 struct FinalModel {
   std::map<std::string, double> parameters;
+  std::map<std::string, double> parameter_std;  // empty: not known
   Effects effects;
-  std::vector<EffectKind> on_bound;  // kept effects whose final fit ended on a bound
   internal::EffectLinearization linearization;
   internal::EffectSubsetFit kept_fit;
 };
@@ -283,6 +283,7 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
   for (EffectMask previous = internal::MaskOf(*kept);;) {
     FinalModel model;
     model.parameters = all_data.parameters;
+    model.parameter_std = NamedParameters(all_data.linear.system, all_data.linear.solution.std);
     const EffectMask mask = internal::MaskOf(*kept);
     internal::EnsureFitted(context, {mask}, previous);  // the folds warm-start the fit on all data
     if (!context->records.count(mask)) {                // its refinement failed (a warning says so): the linear model
@@ -290,11 +291,14 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
       continue;
     }
     previous = mask;
+    std::vector<EffectKind> on_bound;
     if (mask != 0) {
       const RefineResult result = RefineOnAllData(all_data.linear, context->records.at(mask), context->options);
       model.effects = result.effects;
       model.parameters = NamedParameters(all_data.linear.system, result.refined.chi);
-      model.on_bound = result.on_bound;
+      model.parameter_std.clear();
+      if (result.has_covariance) model.parameter_std = NamedParameters(all_data.linear.system, result.refined.std);
+      on_bound = result.on_bound;
     }
     model.linearization =
         internal::LinearizeEffects(all_data.linear.flights, model.parameters, all_data.free_parameters, model.effects,
@@ -305,6 +309,8 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
       const Eigen::VectorXd value = model.effects.Get(kind);
       const Eigen::VectorXd std_dev = internal::EffectColumns(model.kept_fit, kind, model.kept_fit.std);
       t.implausible = kind->Implausible(value, std_dev, context->vehicle);
+      if (t.implausible.empty() && std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end())
+        t.implausible = internal::OnBoundStatement(kind, value);
       if (t.implausible.empty()) t.negligible = kind->Negligible(value, std_dev);
       for (std::string* why : {&t.implausible, &t.negligible})
         if (!why->empty()) *why += " (refined on all identification data)";
@@ -339,6 +345,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.warnings = full.warnings;
   for (const EffectVerdict& v : unavailable) diagnosis.warnings.push_back(v.note);
   diagnosis.linear_parameters = NamedParameters(full.system, full.solution.chi);
+  diagnosis.linear_parameter_std = NamedParameters(full.system, full.solution.std);
   timer.Mark("linear identification");
 
   // Held-out data: time-blocked folds, or the given flights with the model fitted on everything.
@@ -365,9 +372,9 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   const FinalModel final_model = FitFinalModel(all_data, &context, &backward.kept, &forward.tested);
   const internal::EffectLinearization& linearization = final_model.linearization;
   const internal::EffectSubsetFit& kept_fit = final_model.kept_fit;
-  const std::vector<EffectKind>& on_bound = final_model.on_bound;
   diagnosis.final_effects = final_model.effects;
   diagnosis.final_parameters = final_model.parameters;
+  diagnosis.final_parameter_std = final_model.parameter_std;
   diagnosis.selected = backward.kept;
   const EffectMask kept = internal::MaskOf(backward.kept);
   const std::vector<EffectKind> kept_kinds = KindsOf(kept);
@@ -389,7 +396,6 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   internal::MarkConfounded(diagnosis.confounded, &verdicts);
   timer.Mark("confounding");
   for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options, diagnosis.selected);
-  internal::AddBoundNotes(on_bound, &verdicts);
   diagnosis.ranking = internal::Rank(std::move(verdicts), diagnosis.selected, unavailable);
 
   // Where.

@@ -10,10 +10,12 @@
 namespace rotorid {
 namespace {
 
-// A parameter the diagnosis discarded is 0 in its map: not estimated.
-CheckedParameters ValuesOnly(const std::map<std::string, double>& values) {
+// A parameter the diagnosis discarded is 0 in its map: not estimated. Without a std (empty map) a
+// check counts any violation.
+CheckedParameters Checked(const std::map<std::string, double>& values, const std::map<std::string, double>& std) {
   CheckedParameters p;
   p.value = values;
+  p.std = std;
   for (const auto& [name, value] : values) p.essential[name] = value != 0.0;
   return p;
 }
@@ -28,12 +30,12 @@ constexpr int kSignatureRowSamples = 2000;
 }  // namespace
 
 std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs) {
-  std::vector<Check> checks = CheckParameters(ValuesOnly(diagnosis.linear_parameters), configs, "linear");
+  std::vector<Check> checks = CheckParameters(Checked(diagnosis.linear_parameters, diagnosis.linear_parameter_std), configs, "linear");
   auto append = [&](std::vector<Check> more) {
     for (Check& c : more) checks.push_back(std::move(c));
   };
   if (!diagnosis.selected.empty()) {
-    append(CheckParameters(ValuesOnly(diagnosis.final_parameters), configs, "final"));
+    append(CheckParameters(Checked(diagnosis.final_parameters, diagnosis.final_parameter_std), configs, "final"));
     bool finite = true;
     for (EffectKind kind : diagnosis.selected)
       finite =

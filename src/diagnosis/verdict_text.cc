@@ -1,9 +1,7 @@
 #include "diagnosis/verdict_text.h"
 
-#include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <limits>
 #include <optional>
 #include <sstream>
 
@@ -58,35 +56,27 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
   return note.str();
 }
 
+// Distance from a bound, relative to the range, within which a value is on it (the refinement's own
+// test is stricter, 1e-9: this one only has to find the coordinate that test saw).
+constexpr double kOnBoundMargin = 1e-6;
+
 std::string OnBoundStatement(EffectKind kind, const Eigen::VectorXd& value) {
   const double lower = kind->info().lower_bound, upper = kind->info().upper_bound;
-  const double none = std::numeric_limits<double>::infinity();
-  auto distance = [&](double v, double bound) { return bound != 0.0 ? std::abs(v - bound) : none; };
-  double nearest = none;
-  for (double v : value) nearest = std::min({nearest, distance(v, lower), distance(v, upper)});
+  const double margin = kOnBoundMargin * (upper - lower);
+  auto on = [&](double v, double bound) { return bound != 0.0 && std::abs(v - bound) <= margin; };
   const std::vector<std::string> labels = kind->Labels(static_cast<int>(value.size()));
   std::string out;
   int named = 0;
   for (Eigen::Index k = 0; k < value.size(); ++k) {
-    const bool at_upper = distance(value[k], upper) == nearest, at_lower = distance(value[k], lower) == nearest;
-    if (nearest == none || !(at_upper || at_lower)) continue;
-    const double bound = at_upper ? upper : lower;
+    const bool at_upper = on(value[k], upper);
+    if (!at_upper && !on(value[k], lower)) continue;
     out += std::string(named++ ? ", " : "") + (value.size() == 1 ? kind->name() : labels[k]) + " = " +
            kind->Format(value.segment(k, 1), {}) + " is on its " + (at_upper ? "upper" : "lower") + " bound (" +
-           kind->Format(Eigen::VectorXd::Constant(1, bound), {}) + ")";
+           kind->Format(Eigen::VectorXd::Constant(1, at_upper ? upper : lower), {}) + ")";
   }
-  if (named == 0) return "";
-  return out + (named == 1 ? ": the data push it further; treat it as absorbing something else"
-                           : ": the data push them further; treat them as absorbing something else");
-}
-
-void AddBoundNotes(const std::vector<EffectKind>& on_bound, std::vector<EffectVerdict>* verdicts) {
-  for (EffectVerdict& v : *verdicts)
-    if (v.selected && std::find(on_bound.begin(), on_bound.end(), v.kind) != on_bound.end())
-      if (const std::string statement = OnBoundStatement(v.kind, v.value); !statement.empty()) {
-        v.bound_note = statement;
-        v.note += "; " + statement;
-      }
+  // A bound the descriptor does not know (a grid-searched effect's search range): not named.
+  if (named == 0) return kind->name() + " ended on a bound of its search range: the data push it further";
+  return out + (named == 1 ? ": the data push it further" : ": the data push them further");
 }
 
 namespace {
@@ -167,7 +157,6 @@ std::string WhichText(const Diagnosis& d) {
           << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
           << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
           << "; held-out gap shrinks " << std::setprecision(1) << v.test.shrink_pct << " %)\n";
-      if (!v.bound_note.empty()) out << "       " << v.bound_note << "\n";
     }
   }
   for (const ConfoundedEffects& c : d.confounded) {

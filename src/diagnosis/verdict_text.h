@@ -18,14 +18,12 @@ namespace rotorid::internal {
 std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
                         const std::vector<EffectKind>& selected);
 
-// "motor_lag = 300 ms is on its upper bound (300 ms): the data push it further; treat it as
-// absorbing something else", for an effect that its refinement ended on a bound (RefineResult::
-// on_bound): the coordinates nearest a non-zero bound of its descriptor (the refinement keeps
-// estimates inside those; a zero bound, tau >= 0, is a physical limit, not a failure to fit).
+// "motor_lag = 300 ms is on its upper bound (300 ms): the data push it further", for an effect
+// that its refinement ended on a bound (RefineResult::on_bound): the coordinates nearest a non-zero
+// bound of its descriptor (the refinement keeps estimates inside those; a zero bound, tau >= 0, is a
+// physical limit, not a failure to fit). Such an estimate is not an optimum but a clipped value, so
+// the diagnosis reports the effect implausible rather than selecting it.
 std::string OnBoundStatement(EffectKind kind, const Eigen::VectorXd& value);
-
-// Appends OnBoundStatement to the notes of the kept effects in `on_bound`.
-void AddBoundNotes(const std::vector<EffectKind>& on_bound, std::vector<EffectVerdict>* verdicts);
 
 // The lines of DiagnosisVerdict: where (component, band, stretch), which (the kept effects with
 // what the final fit says about them, the confounding notes and the other candidates' notes), and

@@ -345,9 +345,28 @@ Estimate Find(const CheckedParameters& p, const std::string& name) {
   return e;
 }
 
+// The cause to name when kd and I_zz are both negative: the yaw equation holds them only as a ratio
+// (kd x rotor signal = I_zz x yaw acceleration + ...), and only the weak gyroscopic terms of the roll
+// and pitch rows fix their common scale. On a log with little yaw motion that scale can come out
+// negative with a small first-order std (simulated Crazyflie take-off and landing: kd -1.3e-11 +-
+// 8e-13 and I_zz -3.8e-6 for 1e-10 and 2.9e-5, their ratio right): reversed spins flip kd alone.
+const char kYawScaleCause[] =
+    "kd and I_zz are both negative: their ratio is what the yaw equation fixes, and this log has too little yaw "
+    "motion to fix their scale; fly yaw manoeuvres, or take kd from a thrust stand";
+
+bool YawScaleFlipped(const CheckedParameters& p, const std::vector<std::string>& configs) {
+  const Estimate kd = Find(p, "kd");
+  if (!kd.estimated || kd.value >= 0.0) return false;
+  for (const std::string& config : configs)
+    if (const Estimate zz = Find(p, config + ".I_zz"); zz.estimated && zz.value < 0.0) return true;
+  return false;
+}
+
 // `yaw_anchored`: kd is estimated. Without it the yaw equation has no known scale and I_zz comes
-// from the gyroscopic terms alone, so it is left out of the tests.
-Check InertiaCheck(const CheckedParameters& p, const std::string& config, const std::string& label, bool yaw_anchored) {
+// from the gyroscopic terms alone, so it is left out of the tests. `yaw_scale_flipped`: see
+// kYawScaleCause, named instead of the inputs.
+Check InertiaCheck(const CheckedParameters& p, const std::string& config, const std::string& label, bool yaw_anchored,
+                   bool yaw_scale_flipped) {
   const std::string name = label + " " + config;
   auto get = [&](const char* n) { return Find(p, config + "." + n); };
   const Estimate xx = get("I_xx"), yy = get("I_yy");
@@ -383,9 +402,10 @@ Check InertiaCheck(const CheckedParameters& p, const std::string& config, const 
             name + ": positive definite, triangle inequalities hold" +
                 (yaw_anchored ? "" : " (I_zz not tested: kd not estimated, so the yaw equation has no scale)")};
   return {"inertia", CheckStatus::kError,
-          name + " inertia is not physical (" + problems +
-              "): a wrong rotor order, spin or unit in the inputs (see the input checks), or a log that does not "
-              "excite these axes"};
+          name + " inertia is not physical (" + problems + "): " +
+              (yaw_scale_flipped ? std::string(kYawScaleCause)
+                                 : "a wrong rotor order, spin or unit in the inputs (see the input checks), or a log "
+                                   "that does not excite these axes")};
 }
 
 }  // namespace
@@ -411,6 +431,7 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
                       label + ": std exactly 0 for " + zero_std +
                           ": the data do not determine them (a motionless or unexcited log?)"});
   const Estimate kt = Find(p, "kt"), kd = Find(p, "kd");
+  const bool yaw_scale_flipped = YawScaleFlipped(p, configs);
   if (kt.estimated && !(kt.value > 0.0))
     checks.push_back({"kt_positive", CheckStatus::kError,
                       label + ": kt = " + ShortNumber(kt.value) +
@@ -420,13 +441,14 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
     checks.push_back({"kt_positive", CheckStatus::kOk, label + ": kt = " + ShortNumber(kt.value)});
   if (kd.estimated && kd.value < -3.0 * kd.std)
     checks.push_back({"kd_positive", CheckStatus::kError,
-                      label + ": kd = " + ShortNumber(kd.value) + " < 0 (std " + ShortNumber(kd.std) +
-                          "): the spin directions in the vehicle file appear reversed (+1 = counter-clockwise seen "
-                          "from above)"});
+                      label + ": kd = " + ShortNumber(kd.value) + " < 0 (std " + ShortNumber(kd.std) + "): " +
+                          (yaw_scale_flipped ? std::string(kYawScaleCause)
+                                             : "the spin directions in the vehicle file appear reversed (+1 = "
+                                               "counter-clockwise seen from above)")});
   else
     checks.push_back({"kd_positive", CheckStatus::kOk,
                       label + ": kd = " + ShortNumber(kd.value) + (kd.estimated ? "" : " (not estimated)")});
-  for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd.estimated));
+  for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd.estimated, yaw_scale_flipped));
   return checks;
 }
 

@@ -45,6 +45,7 @@ const EffectDescriptor& AccDelayEffect() {
     // 5 ms behind its gyro's); beyond 20 ms either way the streams are misaligned by something else.
     i.plausible = {true, -0.02, 0.03, PlausibleScale::kNone,
                    "on-board filters put the accelerometer a few ms behind the gyro"};
+    i.negligible = SubMillisecondTimeShift();
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";

@@ -60,6 +60,7 @@ const EffectDescriptor& DelayEffect() {
     // A rotor speed measured through a filter can be logged up to ~30 ms after it acts; ESC latency and a
     // few control periods stay under ~150 ms. Beyond, the logs' clocks disagree or a lag hides in it.
     i.plausible = {true, -0.03, 0.15, PlausibleScale::kNone, "ESC latency and a few control periods"};
+    i.negligible = SubMillisecondTimeShift();
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";

@@ -63,6 +63,7 @@ const EffectDescriptor& MotorLagEffect() {
     // measured PWM -> RPM 59 ms), ~100 ms the largest propellers. A longer lag smooths away something else
     // (MODEL.md 9: it ran to 300 ms on PWM-driven Crazyflies).
     i.plausible = {true, 0.0, 0.15, PlausibleScale::kNone, "motors and propellers respond within ~100 ms"};
+    i.negligible = SubMillisecondTimeShift();
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e3;
     i.display_unit = "ms";

@@ -125,22 +125,24 @@ TEST(DiagnosisTest, DelayPlusLagIsReportedAsConfoundedWithWhatTheDataFix) {
   EXPECT_NEAR(value, 0.025, 0.004) << DiagnosisVerdict(d);
 }
 
-// An accelerometer bias beyond the effect's physical range (3 m/s^2 on z, bound 2) is selected with
-// its z coordinate on the bound: the verdict says so instead of reporting the bound as an estimate.
-TEST(DiagnosisTest, KeptEffectOnItsBoundIsNamedInTheVerdict) {
+// An accelerometer bias beyond the effect's physical range (3 m/s^2 on z, bound 2) ends the final
+// fit with its z coordinate on the bound: a clipped value, not an estimate, so the effect is reported
+// implausible (naming the bound) and not selected.
+TEST(DiagnosisTest, EffectOnItsBoundIsImplausibleNotSelected) {
   Effects withheld;
   withheld.Set("acc_bias", Eigen::Vector3d(0.1, -0.1, 3.0));
   const EffectKind acc_bias = ParseEffectKind("acc_bias");
   DiagnosisOptions options = TestOptions();
   options.candidates = {acc_bias};
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 5, withheld)}, {}, options);
-  ASSERT_EQ(d.selected, std::vector<EffectKind>{acc_bias}) << DiagnosisVerdict(d);
-  ASSERT_EQ(d.final_effects.Get(acc_bias)[2], acc_bias->info().upper_bound) << DiagnosisVerdict(d);
-  const std::string statement =
-      "acc_bias_z = 2 m/s^2 is on its upper bound (2 m/s^2): the data push it further; treat it as absorbing "
-      "something else";
-  EXPECT_NE(VerdictOf(d, acc_bias).note.find("; " + statement), std::string::npos) << VerdictOf(d, acc_bias).note;
-  EXPECT_NE(DiagnosisVerdict(d).find("\n       " + statement + "\n"), std::string::npos) << DiagnosisVerdict(d);
+  EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);
+  const EffectVerdict& v = VerdictOf(d, acc_bias);
+  EXPECT_EQ(v.status, "implausible") << v.note;
+  EXPECT_EQ(v.implausible,
+            "acc_bias_z = 2 m/s^2 is on its upper bound (2 m/s^2): the data push it further (refined on all "
+            "identification data)");
+  EXPECT_EQ(v.note.rfind("implausible: absorbs something else; " + v.implausible, 0), 0u) << v.note;
+  EXPECT_NE(DiagnosisVerdict(d).find("acc_bias: implausible"), std::string::npos) << DiagnosisVerdict(d);
 }
 
 // Per-rotor thrust scales of a realistic size (a few %) are a candidate like any other: selected, each

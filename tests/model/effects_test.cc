@@ -119,7 +119,7 @@ TEST(EffectsTest, PhysicalRangesScaleWithTheVehicleAndAllowThreeStd) {
 // A lever arm whose x, y norm is below 1 mm with 3 std is negligible; its held z does not count, and
 // an estimate whose 3 std reach the floor is not. Effects without a floor are never negligible, and
 // the simulator's smallest realistic draw of an effect with one is above it.
-TEST(EffectsTest, ASubMillimetreLeverArmIsNegligible) {
+TEST(EffectsTest, ASubMillimetreLeverArmOrSubMillisecondTimeShiftIsNegligible) {
   const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
   const Eigen::Vector3d std_dev(0.1e-3, 0.1e-3, 0.0);
   const std::string why = lever_arm->Negligible(Eigen::Vector3d(0.3e-3, -0.4e-3, 0.02), std_dev);
@@ -130,10 +130,21 @@ TEST(EffectsTest, ASubMillimetreLeverArmIsNegligible) {
       << why;
   EXPECT_EQ(lever_arm->Negligible(Eigen::Vector3d(0.3e-3, -0.4e-3, 0.0), 2.0 * std_dev), "");  // 0.5 + 3 x 0.2 mm
   EXPECT_EQ(lever_arm->Negligible(Eigen::Vector3d(1.1e-3, 0.0, 0.0), {}), "");
-  const DrawRange& draw = lever_arm->info().draw;
-  EXPECT_GT(draw.low * draw.to_si, lever_arm->info().negligible.below);
+  // The timing effects' floor, 1 ms: the 0.10-0.11 +- 0.04 ms time shifts measured on flights
+  // without one; a delay counts by its size, either sign.
+  for (const char* timing : {"motor_lag", "delay", "acc_delay"}) {
+    const EffectKind kind = ParseEffectKind(timing);
+    EXPECT_NE(kind->Negligible(Eigen::VectorXd::Constant(1, 0.11e-3), Eigen::VectorXd::Constant(1, 0.04e-3)), "");
+    EXPECT_EQ(kind->Negligible(Eigen::VectorXd::Constant(1, 0.5e-3), Eigen::VectorXd::Constant(1, 0.2e-3)), "");
+  }
+  EXPECT_EQ(ParseEffectKind("delay")->Negligible(Eigen::VectorXd::Constant(1, -2e-3), {}), "");
   for (EffectKind kind : AllEffects()) {
-    if (kind->info().negligible.below != 0.0) continue;
+    const double floor = kind->info().negligible.below;
+    if (floor != 0.0) {  // a floor never hides an effect of the sizes the simulator draws
+      const DrawRange& draw = kind->info().draw;
+      EXPECT_GT(draw.low * draw.to_si, floor) << kind->name();
+      continue;
+    }
     EXPECT_EQ(kind->Negligible(Eigen::VectorXd::Zero(kind->Dimension(PresetVehicle("B").vehicle)), {}), "")
         << kind->name();
   }

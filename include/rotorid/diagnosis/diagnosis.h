@@ -135,8 +135,6 @@ struct EffectVerdict {
   // the effects selected after it (`test` is that test).
   bool dropped_as_redundant = false;
   std::string note;  // one line for people
-  // A selected effect whose final fit ended on a bound: which value, which bound (also in `note`).
-  std::string bound_note;
   // Status "implausible": which value lies outside which physical range (also in `note`).
   std::string implausible;
   // Status "negligible": which value lies below which size, and why that size (also in `note`).
@@ -183,6 +181,10 @@ struct Diagnosis {
   // The final model fitted on all identification data.
   std::map<std::string, double> linear_parameters;
   std::map<std::string, double> final_parameters;
+  // Their std (empty when not known: the final fit's covariance can be rank deficient); the
+  // physical checks count a violation only beyond 3 std.
+  std::map<std::string, double> linear_parameter_std;
+  std::map<std::string, double> final_parameter_std;
   Effects final_effects;
   Effects final_effects_std;
   std::vector<ConfoundedEffects> confounded;
