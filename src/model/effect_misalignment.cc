@@ -45,6 +45,10 @@ const EffectDescriptor& MisalignmentEffect() {
     i.simulator_limit = {false, 0.0, 0.3};
     // A board mounted visibly crooked is ~10 deg off; beyond, the vehicle file's IMU orientation is wrong.
     i.plausible = {false, 0.0, 10.0 * kDegToRad, PlausibleScale::kNone, "a crooked mount is a few deg off"};
+    // On the independent simulator's clean flight (A_clean) the blind diagnosis selected 0.24 +- 0.05
+    // deg about z (held-out shrink 0.4 %), a misfit of a second simulator's conventions, not a mount.
+    i.negligible.below = 0.5 * kDegToRad;
+    i.negligible.why = "an IMU board is mounted to about half a degree, and a vehicle file's frame is not known better";
     i.settle_tolerance = 1e-5;
     i.display_scale = kRadToDeg;
     i.display_unit = "deg";

@@ -38,6 +38,10 @@ const EffectDescriptor& RotorThrustScaleEffect() {
     // Propellers and motors of one batch differ by a few %, a chipped or worn propeller by up to ~10 %;
     // tens of percent stand in for something else (a rotor position or spin wrong in the vehicle file).
     i.plausible = {true, -0.1, 0.1, PlausibleScale::kNone, "propellers and motors differ by a few %"};
+    // On the independent simulator's battery + motor lag flight the blind diagnosis selected scales of
+    // 0.03 +- 0.01 % (held-out shrink 6.7 % of a gap already at 0-2 %) after the two true effects.
+    i.negligible.below = 0.01;
+    i.negligible.why = "a thrust stand repeats a propeller's thrust to about 1 %, and propellers of one batch differ by more";
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e2;
     i.display_unit = "%";

@@ -119,7 +119,7 @@ TEST(EffectsTest, PhysicalRangesScaleWithTheVehicleAndAllowThreeStd) {
 // A lever arm whose x, y norm is below 1 mm with 3 std is negligible; its held z does not count, and
 // an estimate whose 3 std reach the floor is not. Effects without a floor are never negligible, and
 // the simulator's smallest realistic draw of an effect with one is above it.
-TEST(EffectsTest, ASubMillimetreLeverArmOrSubMillisecondTimeShiftIsNegligible) {
+TEST(EffectsTest, EstimatesBelowAnEffectsFloorAreNegligible) {
   const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
   const Eigen::Vector3d std_dev(0.1e-3, 0.1e-3, 0.0);
   const std::string why = lever_arm->Negligible(Eigen::Vector3d(0.3e-3, -0.4e-3, 0.02), std_dev);
@@ -138,11 +138,29 @@ TEST(EffectsTest, ASubMillimetreLeverArmOrSubMillisecondTimeShiftIsNegligible) {
     EXPECT_EQ(kind->Negligible(Eigen::VectorXd::Constant(1, 0.5e-3), Eigen::VectorXd::Constant(1, 0.2e-3)), "");
   }
   EXPECT_EQ(ParseEffectKind("delay")->Negligible(Eigen::VectorXd::Constant(1, -2e-3), {}), "");
+  EXPECT_NE(ParseEffectKind("misalignment")->Negligible(Eigen::Vector3d(9.4e-5, 5.7e-5, -4.26e-3),
+                                                        Eigen::Vector3d(1.0e-4, 1.1e-4, 0.92e-3)),
+            "");  // A_clean's 0.24 deg about z
+  EXPECT_NE(ParseEffectKind("acc_bias")->Negligible(Eigen::Vector3d(8.2e-5, -3.1e-4, 2.0e-3),
+                                                    Eigen::Vector3d(1.5e-4, 1.4e-4, 1.05e-3)),
+            "");  // independent CF_battery_motor_lag's 30 ug
+  EXPECT_NE(ParseEffectKind("rotor_thrust_scale")->Negligible(Eigen::Vector4d(2.5e-4, 1.5e-4, -2.4e-4, -1.6e-4),
+                                                              Eigen::Vector4d::Constant(1.2e-4)),
+            "");
+  EXPECT_EQ(ParseEffectKind("rotor_thrust_scale")->Negligible(Eigen::Vector4d(0.011, -0.003, -0.009, 0.001),
+                                                              Eigen::Vector4d::Constant(0.0055)),
+            "");
   for (EffectKind kind : AllEffects()) {
     const double floor = kind->info().negligible.below;
-    if (floor != 0.0) {  // a floor never hides an effect of the sizes the simulator draws
+    if (floor != 0.0) {
+      // A floor never hides an effect of the sizes the simulator draws: a draw of sizes starts above
+      // it; a spread around zero (per-rotor scales) is at least three floors wide each way, so the
+      // largest of four rotors falls below the floor in about 1 % of flights.
       const DrawRange& draw = kind->info().draw;
-      EXPECT_GT(draw.low * draw.to_si, floor) << kind->name();
+      if (draw.low >= 0.0)
+        EXPECT_GT(draw.low * draw.to_si, floor) << kind->name();
+      else
+        EXPECT_GE(std::min(-draw.low, draw.high) * draw.to_si / floor, 3.0 - 1e-9) << kind->name();
       continue;
     }
     EXPECT_EQ(kind->Negligible(Eigen::VectorXd::Zero(kind->Dimension(PresetVehicle("B").vehicle)), {}), "")
