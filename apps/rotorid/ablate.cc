@@ -74,7 +74,7 @@ Command AddAblateCommand(CLI::App& root) {
 
     // Each subset's failed checks (the passing ones would repeat for every subset).
     for (const AblationEntry& e : ablation.entries)
-      for (Check& c : CheckRefinement(linear, e.result, SubsetName(e.effects)))
+      for (Check& c : CheckRefinement(linear, e.result, SubsetName(e.effects), CheckStatus::kWarning))
         if (c.status != CheckStatus::kOk) checks.push_back(std::move(c));
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)}};

@@ -12,7 +12,7 @@ bool OnBound(double value, double low, double high) {
 }
 
 // Effects whose estimate is not finite, and those that sit on the bound of their range (as Refine found).
-std::vector<Check> EffectChecks(const RefineResult& refined, const std::string& label) {
+std::vector<Check> EffectChecks(const RefineResult& refined, const std::string& label, CheckStatus on_bound_status) {
   std::string not_finite, bounded;
   for (EffectKind kind : refined.enabled) {
     if (!refined.effects.Get(kind).allFinite() || !refined.effects_std.Get(kind).allFinite())
@@ -24,10 +24,10 @@ std::vector<Check> EffectChecks(const RefineResult& refined, const std::string& 
   if (!not_finite.empty())
     checks.push_back({"effects_finite", CheckStatus::kError, label + ": NaN or inf in " + not_finite});
   if (!bounded.empty())
-    checks.push_back({"effects_on_bounds", CheckStatus::kWarning,
+    checks.push_back({"effects_on_bounds", on_bound_status,
                       label + ": " + bounded +
-                          " ended on the bound of its range: the flights do not determine it, or the residual has a "
-                          "cause outside the modelled effects"});
+                          " ended on the bound of its range, so the bound clipped it: the flights do not determine it, "
+                          "or it absorbs a cause outside the modelled effects"});
   else
     checks.push_back({"effects_on_bounds", CheckStatus::kOk, label + ": every effect inside its range"});
   return checks;
@@ -63,9 +63,9 @@ std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, co
 }  // namespace
 
 std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
-                                   const std::string& label) {
+                                   const std::string& label, CheckStatus on_bound_status) {
   std::vector<Check> checks = RefinedParameterChecks(linear, refined, label);
-  Append(&checks, EffectChecks(refined, label));
+  Append(&checks, EffectChecks(refined, label, on_bound_status));
   Append(&checks, CheckRelativeError(refined.relative_error_pct, label, /*held_out=*/false));
   return checks;
 }
@@ -77,7 +77,7 @@ std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEst
       !std::isfinite(estimate.motor_tau_s) || !std::isfinite(estimate.motor_tau_std_s))
     checks.push_back({"effects_finite", CheckStatus::kError, "delay: the delay or its std is NaN or inf"});
   if (OnBound(estimate.delay_s, options.search.min_s, options.search.max_s))
-    checks.push_back({"effects_on_bounds", CheckStatus::kWarning,
+    checks.push_back({"effects_on_bounds", CheckStatus::kError,
                       "delay: " + std::to_string(1000.0 * estimate.delay_s) +
                           " ms is on the edge of the searched range: widen --min-s/--max-s"});
   else

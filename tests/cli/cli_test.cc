@@ -125,6 +125,24 @@ TEST_F(CliTest, AccelerometerBiasIsFlagged) {
       << r.err;
 }
 
+// An effect that the refinement leaves on its bound is not an estimate: refine writes its report and
+// exits 3, the check naming the effect (an acc bias of 3 m/s^2 in z against a bound of 2).
+TEST_F(CliTest, RefinedEffectOnItsBoundExitsThree) {
+  const auto s = RunRotorid({"simulate", "--preset", "B", "--seconds", "30", "--seed", "5", "--effect",
+                             "acc_bias=0.1,-0.1,3.0", "--out", Path("bound.csv"), "--quiet"});
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const auto r = RunRotorid({"refine", "--vehicle", Path("B.yaml"), "--log", Path("bound.csv"), "--effects",
+                             "acc_bias", "--json", Path("bound.json"), "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("acc_bias ended on the bound of its range"), std::string::npos) << r.err;
+  const nlohmann::json report = LoadJson(Path("bound.json"));
+  EXPECT_TRUE(report["refined"]["effects"]["acc_bias"]["on_bound"].get<bool>());
+  bool failed = false;
+  for (const auto& check : report["checks"])
+    failed = failed || (check["name"] == "effects_on_bounds" && check["status"] == "error");
+  EXPECT_TRUE(failed) << report["checks"].dump();
+}
+
 struct BadInput {
   std::string name;
   std::string content;

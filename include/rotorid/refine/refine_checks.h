@@ -13,9 +13,11 @@
 namespace rotorid {
 
 // `label` names the model in the messages ("refined", "delay,motor_lag", ...). Effects on their
-// bounds are the ones Refine reported (RefineResult::on_bound).
+// bounds are the ones Refine reported (RefineResult::on_bound): an error by default, since a value
+// the bound clipped is not an estimate; ablation, which compares subsets, passes kWarning.
 std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
-                                   const std::string& label = "refined");
+                                   const std::string& label = "refined",
+                                   CheckStatus on_bound_status = CheckStatus::kError);
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
                               const DelayOptions& options);
 
