@@ -30,7 +30,8 @@ constexpr int kSignatureRowSamples = 2000;
 }  // namespace
 
 std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs) {
-  std::vector<Check> checks = CheckParameters(Checked(diagnosis.linear_parameters, diagnosis.linear_parameter_std), configs, "linear");
+  std::vector<Check> checks =
+      CheckParameters(Checked(diagnosis.linear_parameters, diagnosis.linear_parameter_std), configs, "linear");
   auto append = [&](std::vector<Check> more) {
     for (Check& c : more) checks.push_back(std::move(c));
   };

@@ -448,7 +448,8 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
   else
     checks.push_back({"kd_positive", CheckStatus::kOk,
                       label + ": kd = " + ShortNumber(kd.value) + (kd.estimated ? "" : " (not estimated)")});
-  for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd.estimated, yaw_scale_flipped));
+  for (const std::string& config : configs)
+    checks.push_back(InertiaCheck(p, config, label, kd.estimated, yaw_scale_flipped));
   return checks;
 }
 

@@ -22,8 +22,9 @@ namespace rotorid::internal {
 // delay of the same size; with one on the delay too, an accelerometer delay of the same size: to
 // first order each is the same small time shift, which stands in for the flights' small misfits.
 inline NegligibleSize SubMillisecondTimeShift() {
-  return {1e-3, "a time shift under a millisecond is below half a sample of a 500 Hz log, and smaller than any "
-                "motor's response or filter's delay that matters to a controller"};
+  return {1e-3,
+          "a time shift under a millisecond is below half a sample of a 500 Hz log, and smaller than any "
+          "motor's response or filter's delay that matters to a controller"};
 }
 
 //   and optionally  static double AccelerometerDelay(const Eigen::VectorXd& v);  // series shift

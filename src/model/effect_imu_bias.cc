@@ -48,7 +48,7 @@ const EffectDescriptor& AccBiasEffect() {
     // A MEMS accelerometer's zero-g offset, uncalibrated and over temperature, is at most ~150 mg.
     i.plausible = {true, -2.0, 2.0, PlausibleScale::kNone, "a MEMS accelerometer's zero-g offset is under ~150 mg"};
     // On the independent simulator's battery + motor lag flight, once both were in (every held-out
-    // component at its noise floor), the blind diagnosis selected (0.08, -0.31, 2.0) mm/s^2: 30 ug.
+    // component at its noise floor), the blind diagnosis selected (0.08, -0.31, 2.0) mm/s^2: 0.2 mg.
     i.negligible.below = 0.01;
     i.negligible.why = "no accelerometer's offset is calibrated or stable to better than about 1 mg (0.01 m/s^2)";
     i.settle_tolerance = 1e-4;

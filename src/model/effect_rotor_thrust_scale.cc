@@ -41,7 +41,8 @@ const EffectDescriptor& RotorThrustScaleEffect() {
     // On the independent simulator's battery + motor lag flight the blind diagnosis selected scales of
     // 0.03 +- 0.01 % (held-out shrink 6.7 % of a gap already at 0-2 %) after the two true effects.
     i.negligible.below = 0.01;
-    i.negligible.why = "a thrust stand repeats a propeller's thrust to about 1 %, and propellers of one batch differ by more";
+    i.negligible.why =
+        "a thrust stand repeats a propeller's thrust to about 1 %, and propellers of one batch differ by more";
     i.settle_tolerance = 1e-5;
     i.display_scale = 1e2;
     i.display_unit = "%";

@@ -1,6 +1,7 @@
 #include "rotorid/refine/refine_checks.h"
 
 #include <cmath>
+
 #include "rotorid/core/text.h"
 
 namespace rotorid {

@@ -131,8 +131,8 @@ TEST_F(CliTest, RefinedEffectOnItsBoundExitsThree) {
   const auto s = RunRotorid({"simulate", "--preset", "B", "--seconds", "30", "--seed", "5", "--effect",
                              "acc_bias=0.1,-0.1,3.0", "--out", Path("bound.csv"), "--quiet"});
   ASSERT_EQ(s.exit_code, 0) << s.err;
-  const auto r = RunRotorid({"refine", "--vehicle", Path("B.yaml"), "--log", Path("bound.csv"), "--effects",
-                             "acc_bias", "--json", Path("bound.json"), "--quiet"});
+  const auto r = RunRotorid({"refine", "--vehicle", Path("B.yaml"), "--log", Path("bound.csv"), "--effects", "acc_bias",
+                             "--json", Path("bound.json"), "--quiet"});
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("acc_bias ended on the bound of its range"), std::string::npos) << r.err;
   const nlohmann::json report = LoadJson(Path("bound.json"));

@@ -138,17 +138,17 @@ TEST(EffectsTest, EstimatesBelowAnEffectsFloorAreNegligible) {
     EXPECT_EQ(kind->Negligible(Eigen::VectorXd::Constant(1, 0.5e-3), Eigen::VectorXd::Constant(1, 0.2e-3)), "");
   }
   EXPECT_EQ(ParseEffectKind("delay")->Negligible(Eigen::VectorXd::Constant(1, -2e-3), {}), "");
-  EXPECT_NE(ParseEffectKind("misalignment")->Negligible(Eigen::Vector3d(9.4e-5, 5.7e-5, -4.26e-3),
-                                                        Eigen::Vector3d(1.0e-4, 1.1e-4, 0.92e-3)),
+  EXPECT_NE(ParseEffectKind("misalignment")
+                ->Negligible(Eigen::Vector3d(9.4e-5, 5.7e-5, -4.26e-3), Eigen::Vector3d(1.0e-4, 1.1e-4, 0.92e-3)),
             "");  // A_clean's 0.24 deg about z
-  EXPECT_NE(ParseEffectKind("acc_bias")->Negligible(Eigen::Vector3d(8.2e-5, -3.1e-4, 2.0e-3),
-                                                    Eigen::Vector3d(1.5e-4, 1.4e-4, 1.05e-3)),
-            "");  // independent CF_battery_motor_lag's 30 ug
-  EXPECT_NE(ParseEffectKind("rotor_thrust_scale")->Negligible(Eigen::Vector4d(2.5e-4, 1.5e-4, -2.4e-4, -1.6e-4),
-                                                              Eigen::Vector4d::Constant(1.2e-4)),
+  EXPECT_NE(ParseEffectKind("acc_bias")
+                ->Negligible(Eigen::Vector3d(8.2e-5, -3.1e-4, 2.0e-3), Eigen::Vector3d(1.5e-4, 1.4e-4, 1.05e-3)),
+            "");  // independent CF_battery_motor_lag's 0.2 mg
+  EXPECT_NE(ParseEffectKind("rotor_thrust_scale")
+                ->Negligible(Eigen::Vector4d(2.5e-4, 1.5e-4, -2.4e-4, -1.6e-4), Eigen::Vector4d::Constant(1.2e-4)),
             "");
-  EXPECT_EQ(ParseEffectKind("rotor_thrust_scale")->Negligible(Eigen::Vector4d(0.011, -0.003, -0.009, 0.001),
-                                                              Eigen::Vector4d::Constant(0.0055)),
+  EXPECT_EQ(ParseEffectKind("rotor_thrust_scale")
+                ->Negligible(Eigen::Vector4d(0.011, -0.003, -0.009, 0.001), Eigen::Vector4d::Constant(0.0055)),
             "");
   for (EffectKind kind : AllEffects()) {
     const double floor = kind->info().negligible.below;
