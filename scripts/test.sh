@@ -27,8 +27,9 @@ cmake --build build/asan -j"$JOBS"
 # simulator's flights (60 s under the sanitizers) the paths SimulatedRecoveryTest runs here: both
 # run in Release above. The anchored criterion's study of a withheld lever arm (four refinements,
 # 55 s under the sanitizers) runs the paths that RefineTest.AllEffectsOffReturnsTls (anchored) and
-# the gradient checker run here. The diagnosis' two lever-arm cases (2 s each in Release; a 500 Hz
-# flight) run the paths the other DiagnosisTest cases run here.
+# the gradient checker run here. The diagnosis' two lever-arm cases and its negligible lever arm
+# through the CLI (2-3 s each in Release; 500 Hz flights) run the paths the other DiagnosisTest and
+# DiagnoseCliTest cases run here.
 # Three per-flight first-moment studies (several refinements each, about 150 s serial under the
 # sanitizers) run the paths FirstMomentTest.EachFlightsFirstMomentAndTheSharedParametersAreRecovered
 # and OneFlightGivesTheSameNumbersAsTheSharedFirstMoment run here; the known lever arm's study (6 s in
@@ -37,5 +38,5 @@ cmake --build build/asan -j"$JOBS"
 # under 30 min.
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --no-tests=error --output-on-failure -j"$JOBS" --timeout 1800 \
-  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere|DiagnosisTest\.(LeverArmAbsorbingAnAccBiasIsNotSelected|LeverArmDoesNotTakeTheFirstMomentsPlaceAlongZ)|FirstMomentTest\.(RefinementKeepsEachFlightsFirstMoment|ASharedFirstMomentIsBiasedOnTheSameFlights|AHeldOutFlightsFirstMomentIsFitted)|ImuLeverArmTest\.KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing|CliWorkflowRealTest\.DiagnosisRefinesTheRivalsOfALeaderThatFailsOutOfSample)$'
+  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere|DiagnosisTest\.(LeverArmAbsorbingAnAccBiasIsNotSelected|LeverArmDoesNotTakeTheFirstMomentsPlaceAlongZ)|FirstMomentTest\.(RefinementKeepsEachFlightsFirstMoment|ASharedFirstMomentIsBiasedOnTheSameFlights|AHeldOutFlightsFirstMomentIsFitted)|ImuLeverArmTest\.KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing|CliWorkflowRealTest\.DiagnosisRefinesTheRivalsOfALeaderThatFailsOutOfSample|DiagnoseCliTest\.ASubMillimetreLeverArmIsNegligibleNotSelected)$'
 
