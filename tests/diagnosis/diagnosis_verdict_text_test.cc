@@ -54,6 +54,25 @@ TEST(VerdictNoteTest, DetectableSizeIsStatedGivenTheSelectedEffects) {
   EXPECT_NE(VerdictNote(v, options, {kDelay}).find("(with delay in the model)"), std::string::npos);
 }
 
+// A selected effect whose every estimated coordinate is within 2 std of zero says that its size is
+// not determined (ARPL log10's thrust scales); a determined one, or a held coordinate, does not.
+TEST(VerdictNoteTest, ASelectedEffectOfUndeterminedSizeSaysSo) {
+  EffectVerdict v;
+  v.kind = kAccBias;
+  v.status = "selected";
+  v.test.shrink_pct = 8.0;
+  v.value = Eigen::Vector3d(0.038, -0.059, 0.009);
+  v.std = Eigen::Vector3d(0.082, 0.078, 0.080);
+  EXPECT_EQ(VerdictNote(v, DiagnosisOptions(), {}),
+            "held-out gap shrinks 8.0 %; its size is not determined (every coordinate within 2 std of zero): the "
+            "flights fix what it removes, not its value");
+  v.value[1] = -0.2;  // one coordinate determined
+  EXPECT_EQ(VerdictNote(v, DiagnosisOptions(), {}), "held-out gap shrinks 8.0 %");
+  v.value = Eigen::Vector3d(0.01, 0.01, 0.5);
+  v.std = Eigen::Vector3d(0.1, 0.1, 0.0);  // z held: only x, y count
+  EXPECT_NE(VerdictNote(v, DiagnosisOptions(), {}).find("not determined"), std::string::npos);
+}
+
 // An effect the final fit left on its bound is not selected: its note says implausible, with the
 // bound, and the verdict's "which" lists it with the other rejected candidates.
 TEST(VerdictNoteTest, AnEffectOnItsBoundIsImplausible) {
