@@ -210,7 +210,8 @@ std::vector<FigureSpec> DiagnosisFigures(const Diagnosis& d) {
       "Left: the held-out gap (Table III relative error) per component with the linear model (baseline), after each "
       "effect the forward selection kept, and with all selected effects (final). Right: how much of the held-out "
       "gap each candidate removes, coloured by its status (green selected, orange confounded with a selected "
-      "effect, red implausible: a value outside its physical range, grey not significant or negligible: too small to matter).";
+      "effect, red implausible: a value outside its physical range or on a bound of its refinement, grey not "
+      "significant or negligible: too small to matter).";
   specs.push_back(std::move(gap));
 
   std::vector<BandBars> bands;
