@@ -306,15 +306,11 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
     model.kept_fit = internal::FitEffectSubset(model.linearization, KindsOf(mask));
     const auto rejected = std::find_if(kept->begin(), kept->end(), [&](EffectKind kind) {
       internal::TestedCandidate& t = (*tested)[kind];
-      const Eigen::VectorXd value = model.effects.Get(kind);
-      const Eigen::VectorXd std_dev = internal::EffectColumns(model.kept_fit, kind, model.kept_fit.std);
-      t.implausible = kind->Implausible(value, std_dev, context->vehicle);
-      if (t.implausible.empty() && std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end())
-        t.implausible = internal::OnBoundStatement(kind, value);
-      if (t.implausible.empty()) t.negligible = kind->Negligible(value, std_dev);
-      for (std::string* why : {&t.implausible, &t.negligible})
-        if (!why->empty()) *why += " (refined on all identification data)";
-      return t.Rejected();
+      if (!t.Judge(kind, model.effects.Get(kind), internal::EffectColumns(model.kept_fit, kind, model.kept_fit.std),
+                   context->vehicle, std::find(on_bound.begin(), on_bound.end(), kind) != on_bound.end()))
+        return false;
+      (t.implausible.empty() ? t.negligible : t.implausible) += " (refined on all identification data)";
+      return true;
     });
     if (rejected == kept->end()) return model;
     kept->erase(rejected);

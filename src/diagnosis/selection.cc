@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "diagnosis/verdict_text.h"
 #include "refine/grid_search.h"
 #include "rotorid/refine/refine.h"
 
@@ -38,6 +39,14 @@ Effects MeanFoldEffects(const ModelRecord& record) {
   Effects mean;
   for (EffectKind kind : KindsOf(record.mask)) mean.Set(kind, MeanFoldEffect(record, kind));
   return mean;
+}
+
+bool TestedCandidate::Judge(EffectKind kind, const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev,
+                            const Vehicle& vehicle, bool on_bound) {
+  implausible = kind->Implausible(value, std_dev, vehicle);
+  if (implausible.empty() && on_bound) implausible = OnBoundStatement(kind, value);
+  negligible = implausible.empty() ? kind->Negligible(value, std_dev) : "";
+  return Rejected();
 }
 
 void EnsureFitted(SelectionContext* context, const std::vector<EffectMask>& masks, EffectMask from) {
@@ -222,11 +231,8 @@ int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fi
     t.test = TestAddedEffects(base.gap, record.gap, to_fit[c]->FreeDimension(context->vehicle), options.alpha,
                               options.min_shrink_pct);
     if (t.step == 1) t.alone = t.test;
-    if (t.test.significant) {
-      const Eigen::VectorXd value = MeanFoldEffect(record, to_fit[c]);
-      t.implausible = to_fit[c]->Implausible(value, t.linearized_std, context->vehicle);
-      if (t.implausible.empty()) t.negligible = to_fit[c]->Negligible(value, t.linearized_std);
-    }
+    if (t.test.significant)
+      t.Judge(to_fit[c], MeanFoldEffect(record, to_fit[c]), t.linearized_std, context->vehicle, /*on_bound=*/false);
     const double ssr = record.gap.whitened_ssr;
     context->records[record.mask] = std::move(record);
     if (t.Rejected()) continue;  // neither selected nor a rival of the selected one

@@ -108,6 +108,10 @@ struct TestedCandidate {
   std::string implausible;
   std::string negligible;
   bool Rejected() const { return !implausible.empty() || !negligible.empty(); }
+  // Sets `implausible` (outside the physical range, or `on_bound`: a bound of its refinement clipped
+  // it) or else `negligible` (below the size that matters) for this estimate; returns Rejected().
+  bool Judge(EffectKind kind, const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev, const Vehicle& vehicle,
+             bool on_bound);
 };
 using TestedCandidates = std::map<EffectKind, TestedCandidate, EffectOrder>;
 
