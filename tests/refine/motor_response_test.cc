@@ -16,7 +16,7 @@ TEST(MotorResponseTest, RecoversTheSimulatorsDelayAndLag) {
   for (const auto& [delay, tau] : {std::pair{0.012, 0.035}, std::pair{0.0, 0.02}, std::pair{0.031, 0.055}}) {
     SCOPED_TRACE(delay);
     SimulationOptions options;
-    options.duration_s = 20.0;
+    options.duration_s = 10.0;
     options.seed = 11;
     options.effects.Set("delay_s", delay);
     options.effects.Set("motor_tau_s", tau);
