@@ -34,9 +34,12 @@ cmake --build build/asan -j"$JOBS"
 # sanitizers) run the paths FirstMomentTest.EachFlightsFirstMomentAndTheSharedParametersAreRecovered
 # and OneFlightGivesTheSameNumbersAsTheSharedFirstMoment run here; the known lever arm's study (6 s in
 # Release) the paths ImuLeverArmTest.RefinementRecoversASimulatedLeverArmAndHoldsItsZ runs here; NanoBench's
-# diagnosis (a real flight, 4 s of CPU in Release) the selection paths DiagnosisTest runs here. Kept
-# under 30 min.
+# diagnosis (a real flight, 4 s of CPU in Release) the selection paths DiagnosisTest runs here. The
+# library's withheld delay (56 s under the sanitizers) runs the paths of the same diagnosis through
+# the CLI (DiagnoseCliTest.WithheldDelayThroughTheCommandLine) here; the implausible thrust scales
+# (36 s) the refinement of PerRotorThrustScalesOfRealisticSizeAreSelected and the verdicts of
+# EffectOnItsBoundIsImplausibleNotSelected here. Kept under 30 min.
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --no-tests=error --output-on-failure -j"$JOBS" --timeout 1800 \
-  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere|DiagnosisTest\.(LeverArmAbsorbingAnAccBiasIsNotSelected|LeverArmDoesNotTakeTheFirstMomentsPlaceAlongZ)|FirstMomentTest\.(RefinementKeepsEachFlightsFirstMoment|ASharedFirstMomentIsBiasedOnTheSameFlights|AHeldOutFlightsFirstMomentIsFitted)|ImuLeverArmTest\.KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing|CliWorkflowRealTest\.DiagnosisRefinesTheRivalsOfALeaderThatFailsOutOfSample|DiagnoseCliTest\.ASubMillimetreLeverArmIsNegligibleNotSelected)$'
+  -E '^(AblateTest\.InformationCriteriaPickTheInjectedEffects|Flights/IndependentSimTest\..*|IndependentSimThrustScaleTest\..*|RefineTest\.AnchoredCriterionFindsNoLagThatIsNotThere|DiagnosisTest\.(LeverArmAbsorbingAnAccBiasIsNotSelected|LeverArmDoesNotTakeTheFirstMomentsPlaceAlongZ|WithheldDelayIsRankedFirstAndItsSizeRecovered|ThrustScalesOfTensOfPercentAreImplausibleAndNotSelected)|FirstMomentTest\.(RefinementKeepsEachFlightsFirstMoment|ASharedFirstMomentIsBiasedOnTheSameFlights|AHeldOutFlightsFirstMomentIsFitted)|ImuLeverArmTest\.KnownLeverArmFromTheVehicleFileIsCorrectedInProcessing|CliWorkflowRealTest\.DiagnosisRefinesTheRivalsOfALeaderThatFailsOutOfSample|DiagnoseCliTest\.ASubMillimetreLeverArmIsNegligibleNotSelected)$'
 
