@@ -33,9 +33,12 @@ Command AddIdentifyCommand(CLI::App& root) {
     Progress progress("identify: processing, system, TLS", IdentifySteps(loaded.flights), options->flights.quiet);
     progress.StartTicking();
     std::vector<Check> checks;
-    const IdentificationResult result = IdentifyWithChecks(std::move(loaded.flights), identify, &checks,
-                                                           [&progress](int done, int) { progress.Update(done); });
+    IdentificationResult result = IdentifyWithChecks(std::move(loaded.flights), identify, &checks,
+                                                     [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
+    // Nothing after the solve reads the system's rows (the check and the report work from the
+    // flights): freed before the check's own allocations (an hour at 200 Hz: 100 MB of 370).
+    result.system.w = Eigen::MatrixXd();
     checks.push_back(CheckResidualSignature(result));
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)},
@@ -56,7 +59,7 @@ Command AddIdentifyCommand(CLI::App& root) {
     if (!options->flights.quiet) {
       std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "
                 << DataSourceName(identify.observation.source) << " data, " << num_flights << " flight(s), "
-                << result.system.w.rows() << " equations\n";
+                << result.system.num_rows() << " equations\n";
       PrintParameterTable(std::cout, result.system.parameter_names, result.solution);
       std::cout << "relative error (paper Table III): " << FormatComponents(result.relative_error_pct) << "\n";
       PrintWarnings(result.warnings);

@@ -124,12 +124,19 @@ IdimSystem BuildIdimSystem(const std::vector<ProcessedFlight>& flights) {
   return system;
 }
 
-void RelativeErrorSums::Add(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t) {
+void RelativeErrorSums::Add(const Eigen::Ref<const Eigen::MatrixXd>& w, const Eigen::VectorXd& chi_t) {
   for (Eigen::Index i = 0; i < w.rows(); ++i) {
     const double rho = w.row(i).dot(chi_t);
     const double rotor = w(i, 0) * chi_t[0] + w(i, 1) * chi_t[1];
     residual_sq[i % 6] += rho * rho;
     rotor_sq[i % 6] += rotor * rotor;
+  }
+}
+
+void RelativeErrorSums::Add(const RelativeErrorSums& other) {
+  for (int j = 0; j < 6; ++j) {
+    residual_sq[j] += other.residual_sq[j];
+    rotor_sq[j] += other.rotor_sq[j];
   }
 }
 

@@ -122,7 +122,7 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
                           {"singular_values", VectorJson(s.singular_values)},
                           {"scale_entry", JsonNumber(s.scale_entry)},
                           {"iterations", s.iterations},
-                          {"rows", result.system.w.rows()}}},
+                          {"rows", result.system.num_rows()}}},
           {"warnings", result.warnings}};
 }
 

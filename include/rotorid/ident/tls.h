@@ -48,6 +48,7 @@ struct IdimLayout {
   std::vector<Eigen::MatrixXd> group_noise_cov;  // per group, sum over its rows (columns as w)
 
   int num_parameters() const { return static_cast<int>(parameter_names.size()); }
+  Eigen::Index num_rows() const { return static_cast<Eigen::Index>(row_group.size()); }  // equations
   int num_flights() const { return static_cast<int>(flight_weight.size()); }
   int num_groups() const { return 6 * num_flights(); }
   static int Component(int group) { return group % 6; }
@@ -144,7 +145,8 @@ std::vector<std::optional<double>> RelativeErrorPct(const Eigen::MatrixXd& w, co
 // several configurations): Add each piece, then Pct.
 struct RelativeErrorSums {
   std::vector<double> residual_sq = std::vector<double>(6, 0.0), rotor_sq = std::vector<double>(6, 0.0);
-  void Add(const Eigen::MatrixXd& w, const Eigen::VectorXd& chi_t);
+  void Add(const Eigen::Ref<const Eigen::MatrixXd>& w, const Eigen::VectorXd& chi_t);  // rows 6 per sample
+  void Add(const RelativeErrorSums& other);
   std::vector<std::optional<double>> Pct() const;
 };
 
