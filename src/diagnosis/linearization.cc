@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -108,6 +109,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   out.effect_jacobian.setZero(total_rows, e);
   out.row_component.resize(total_rows);
   std::vector<std::vector<Eigen::VectorXd>> component_series(kNumWrenchComponents);
+  Eigen::VectorXd signature_scored = Eigen::VectorXd::Zero(e), signature_unscored = Eigen::VectorXd::Zero(e);
 
   Eigen::Index offset = 0;
   std::vector<EffectKind> rotor_kinds;
@@ -137,7 +139,8 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
               w.col(column);
     }
     // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
-    Eigen::Matrix<double, kNumWrenchComponents, 1> scale;
+    Eigen::Matrix<double, kNumWrenchComponents, 1> scale, rms_scale;
+    std::array<bool, kNumWrenchComponents> scored{};
     for (int j = 0; j < kNumWrenchComponents; ++j) {
       double sum = 0.0, rotor_sum = 0.0;
       for (int r = 0; r < samples; ++r) {
@@ -145,9 +148,13 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
         rotor_sum += std::pow(rotor_wrench(j, r), 2);
       }
       const double rms = std::sqrt(sum / std::max(1, samples));
-      scale[j] = rms > 0.0 ? rms : 1.0;
-      if (j >= 2 && rotor_sum == 0.0) {
+      scale[j] = rms_scale[j] = rms > 0.0 ? rms : 1.0;
+      scored[static_cast<size_t>(j)] = !(j >= 2 && rotor_sum == 0.0);
+      if (!scored[static_cast<size_t>(j)]) {
         scale[j] = std::numeric_limits<double>::infinity();
+        if (std::find(out.unscored_components.begin(), out.unscored_components.end(), j) ==
+            out.unscored_components.end())
+          out.unscored_components.push_back(j);
       } else {
         out.scored_rows += samples;
         component_series[j].push_back(rho.row(j).transpose() / scale[j]);
@@ -170,13 +177,17 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
         for (int j = 0; j < kNumWrenchComponents; ++j) {
           WideImuJet rho_jet(0.0);
           for (int c = 0; c < kNumIdimColumns; ++c) rho_jet += jet_rows(j, c) * chi_t[c];
-          for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c)
-            out.effect_jacobian(offset + kNumWrenchComponents * k + j, static_cast<Eigen::Index>(c)) =
-                rho_jet.v[c - first] / scale[j];
+          for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c) {
+            const auto column = static_cast<Eigen::Index>(c);
+            out.effect_jacobian(offset + kNumWrenchComponents * k + j, column) = rho_jet.v[c - first] / scale[j];
+            const double signature = std::pow(rho_jet.v[c - first] / rms_scale[j], 2);
+            (scored[static_cast<size_t>(j)] ? signature_scored : signature_unscored)[column] += signature;
+          }
         }
       }
     offset += kNumWrenchComponents * kept;
   }
+  out.effect_unscored_share = signature_unscored.cwiseQuotient((signature_scored + signature_unscored).cwiseMax(1e-300));
   double factor = 0.0;
   int scored_components = 0;
   for (int j = 0; j < kNumWrenchComponents; ++j) {

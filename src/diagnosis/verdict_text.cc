@@ -74,6 +74,7 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
     note << (ratio.maxCoeff() < 1.0 ? "not detected" : "not significant") << "; this data would reveal it above "
          << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd()) << given;
   }
+  if (!v.unscored.empty()) note << "; " << v.unscored;
   return note.str();
 }
 
@@ -169,8 +170,14 @@ std::string WhichText(const Diagnosis& d) {
   std::ostringstream out;
   out << std::fixed;
   if (d.selected.empty()) {
+    std::string unscored;
+    for (const EffectVerdict& v : d.ranking)
+      if (!v.unscored.empty()) unscored += (unscored.empty() ? "" : ", ") + std::string(EffectName(v.kind));
     out << "which: no candidate effect removes significant held-out residual; the model explains these flights "
-           "as well as the candidates can\n";
+           "as well as the candidates can"
+        << (unscored.empty() ? std::string()
+                             : " in the components it scores (" + unscored + ": mostly in one it does not score, below)")
+        << "\n";
   }
   for (const EffectVerdict& v : d.ranking) {
     if (v.selected) {

@@ -167,6 +167,29 @@ TEST(DiagnosisTest, PerRotorThrustScalesOfRealisticSizeAreSelected) {
   EXPECT_EQ(v.test.added_parameters, 3);  // four scales, their sum pinned
 }
 
+// A rotor inertia (5e-5 kg m^2, configuration A, 30 s) leaves the yaw equation unidentified: the linear
+// identification discards kd (on the clean flight of the same seed it has 1 % std), so Mz is not
+// scored and no test sees the effect, which acts there. The verdict must say so instead of only
+// claiming that this data would reveal it above a size smaller than its own.
+TEST(DiagnosisTest, EffectActingWhereNothingIsScoredIsNotRuledOut) {
+  const EffectKind inertia = ParseEffectKind("rotor_inertia");
+  Effects withheld;
+  withheld.Set(inertia, 5e-5);
+  const SimulationResult sim = testing::SimulatePreset("A", 30.0, 1, withheld);
+  DiagnosisOptions options = TestOptions();
+  options.candidates = {inertia, ParseEffectKind("acc_bias")};
+  options.identify.allow_partial = true;
+  const Diagnosis d = Diagnose(ProcessFlights({{sim.vehicle, sim.log, 1.0}}, ObservationOptions{}), {}, options);
+  ASSERT_FALSE(d.baseline.relative_error_pct[5].has_value()) << DiagnosisVerdict(d);  // Mz not scored
+  const EffectVerdict& v = VerdictOf(d, inertia);
+  EXPECT_FALSE(v.selected);
+  EXPECT_NE(v.unscored.find("of rotor_inertia_kgm2's signature lies in Mz"), std::string::npos) << v.unscored;
+  EXPECT_NE(v.unscored.find("discarded kd"), std::string::npos) << v.unscored;
+  EXPECT_NE(v.note.find("cannot rule it out"), std::string::npos) << v.note;
+  EXPECT_NE(DiagnosisVerdict(d).find("rotor_inertia: not refined"), std::string::npos) << DiagnosisVerdict(d);
+  EXPECT_EQ(VerdictOf(d, ParseEffectKind("acc_bias")).unscored, "");  // acts on the forces
+}
+
 // A wrong candidate that fits only with absurd values is reported as absorbing something else and is
 // not selected: per-rotor thrust scales of +-25 % (beyond the +-10 % propellers of a batch show) are
 // forced into the flight; the true effect of the same flight, a delay of a realistic size, is still
@@ -255,6 +278,7 @@ TEST(DiagnosisTest, CleanFlightFlagsNothing) {
       continue;
     }
     EXPECT_EQ(v.status, "not significant") << EffectName(v.kind);
+    EXPECT_EQ(v.unscored, "") << EffectName(v.kind);  // kd identified: every component scored
     // Absent effects come with the smallest size this flight would reveal.
     ASSERT_EQ(v.detectable_above.size(), EffectDimension(v.kind));
     EXPECT_GT(v.detectable_above.minCoeff(), 0.0) << EffectName(v.kind);

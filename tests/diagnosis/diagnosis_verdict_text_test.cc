@@ -54,6 +54,30 @@ TEST(VerdictNoteTest, DetectableSizeIsStatedGivenTheSelectedEffects) {
   EXPECT_NE(VerdictNote(v, options, {kDelay}).find("(with delay in the model)"), std::string::npos);
 }
 
+// With nothing selected, the "which" line qualifies "the model explains these flights as well as the
+// candidates can" when a candidate acts mostly where nothing is scored, and the note says why.
+TEST(VerdictNoteTest, NothingSelectedNamesTheCandidatesActingWhereNothingIsScored) {
+  Diagnosis d;
+  EffectVerdict v;
+  v.kind = kGyroBias;
+  v.status = "not significant";
+  v.value = Eigen::Vector3d::Zero();
+  v.detectable_above = Eigen::Vector3d(0.06, 0.06, 0.03);
+  v.note = VerdictNote(v, DiagnosisOptions(), {});
+  d.ranking.push_back(v);
+  const std::string plain = WhichText(d);
+  EXPECT_NE(plain.find("as well as the candidates can\n"), std::string::npos) << plain;
+  v.unscored = "but 61 % of gyro_bias_y's signature lies in Mz, which no test here scores";
+  v.note = VerdictNote(v, DiagnosisOptions(), {});
+  EXPECT_NE(v.note.find("rad/s; but 61 % of gyro_bias_y's signature lies in Mz"), std::string::npos) << v.note;
+  d.ranking = {v};
+  const std::string qualified = WhichText(d);
+  EXPECT_NE(qualified.find("as well as the candidates can in the components it scores (gyro_bias: mostly in one "
+                           "it does not score, below)"),
+            std::string::npos)
+      << qualified;
+}
+
 // A selected effect whose every estimated coordinate is within 2 std of zero says that its size is
 // not determined (ARPL log10's thrust scales); a determined one, or a held coordinate, does not.
 TEST(VerdictNoteTest, ASelectedEffectOfUndeterminedSizeSaysSo) {

@@ -139,6 +139,9 @@ struct EffectVerdict {
   std::string implausible;
   // Status "negligible": which value lies below which size, and why that size (also in `note`).
   std::string negligible;
+  // Not selected, and most of its signature falls in a component no test scores (Mz when the linear
+  // identification discarded kd): why this data cannot rule it out (also in `note`).
+  std::string unscored;
 };
 
 struct ConfoundedEffects {
