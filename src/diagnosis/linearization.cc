@@ -49,6 +49,13 @@ Eigen::MatrixXd NormalInverse(const Eigen::MatrixXd& gram) {
   return inverse_norm.asDiagonal() * pinv * inverse_norm.asDiagonal();
 }
 
+// Mean distance of the rotors from the body's z axis (1 m without rotors).
+double MeanArm(const Vehicle& vehicle) {
+  double sum = 0.0;
+  for (const Rotor& rotor : vehicle.rotors) sum += rotor.position_m.head<2>().norm();
+  return vehicle.rotors.empty() || !(sum > 0.0) ? 1.0 : sum / static_cast<double>(vehicle.rotors.size());
+}
+
 }  // namespace
 
 FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
@@ -139,7 +146,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
               w.col(column);
     }
     // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
-    Eigen::Matrix<double, kNumWrenchComponents, 1> scale, rms_scale;
+    Eigen::Matrix<double, kNumWrenchComponents, 1> scale;
     std::array<bool, kNumWrenchComponents> scored{};
     for (int j = 0; j < kNumWrenchComponents; ++j) {
       double sum = 0.0, rotor_sum = 0.0;
@@ -148,7 +155,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
         rotor_sum += std::pow(rotor_wrench(j, r), 2);
       }
       const double rms = std::sqrt(sum / std::max(1, samples));
-      scale[j] = rms_scale[j] = rms > 0.0 ? rms : 1.0;
+      scale[j] = rms > 0.0 ? rms : 1.0;
       scored[static_cast<size_t>(j)] = !(j >= 2 && rotor_sum == 0.0);
       if (!scored[static_cast<size_t>(j)]) {
         scale[j] = std::numeric_limits<double>::infinity();
@@ -167,7 +174,10 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
         out.residual[i] = rho(j, stride * k) / scale[j];
         out.parameter_jacobian.row(i) /= scale[j];
       }
-    // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows).
+    // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows). Where an effect
+    // acts is measured in physical units, forces times the arm (N m): an unscored component's residual
+    // is no scale for it (with kd, I_zz and the products discarded, Mz's residual is almost empty).
+    const double arm = MeanArm(flight.vehicle);
     const EffectRows model(&flight, effects, kinds, &rotor);
     const size_t coordinates = model.coordinates().size();
     for (Eigen::Index k = 0; k < kept; ++k)
@@ -180,7 +190,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
           for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c) {
             const auto column = static_cast<Eigen::Index>(c);
             out.effect_jacobian(offset + kNumWrenchComponents * k + j, column) = rho_jet.v[c - first] / scale[j];
-            const double signature = std::pow(rho_jet.v[c - first] / rms_scale[j], 2);
+            const double signature = std::pow(rho_jet.v[c - first] * (j < 3 ? arm : 1.0), 2);
             (scored[static_cast<size_t>(j)] ? signature_scored : signature_unscored)[column] += signature;
           }
         }

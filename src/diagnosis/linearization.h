@@ -50,8 +50,8 @@ struct EffectLinearization {
   // Rows that carry weight: components the model leaves without rotor term (Mz when kd is
   // discarded; not Fx, Fy) get none, as in the held-out score.
   Eigen::Index scored_rows = 0;
-  // Per effect column: the share of its signature (d rho / d effect over each component's residual
-  // RMS, squared, summed over the rows) that falls in components without weight. An effect acting
+  // Per effect column: the share of its signature (d rho / d effect in N m, forces times the mean
+  // arm, squared, summed over the rows) that falls in components without weight. An effect acting
   // there (a rotor inertia on Mz with kd discarded) is invisible to every test here.
   Eigen::VectorXd effect_unscored_share;
   std::vector<int> unscored_components;  // components without weight in some flight

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "diagnosis/statistics.h"
@@ -114,6 +115,10 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
   v.std = EffectColumns(fit, kind, fit.std);
   v.detectable_above =
       DetectableSizes(v.std, kind->FreeDimension(context.vehicle), fit.effective_samples, context.options);
+  // A free coordinate with no std has no column in the scored rows: no size reveals it (not 0).
+  for (Eigen::Index k = 0; k < v.detectable_above.size(); ++k)
+    if (!(v.std[k] > 0.0) && !kind->Held(static_cast<int>(k)))
+      v.detectable_above[k] = std::numeric_limits<double>::infinity();
   if (v.selected) {
     v.value = outcome.final_effects.Get(kind);
     v.status = "selected";

@@ -102,6 +102,10 @@ std::string EffectDescriptor::Format(const Eigen::VectorXd& value, const Eigen::
   const double unit = info_.display_scale;
   std::ostringstream out;
   auto entry = [&](Eigen::Index k) {
+    if (std::isinf(value[k])) {  // a detectable size that none reaches
+      out << "unobservable";
+      return;
+    }
     out << std::setprecision(3) << value[k] * unit;
     if (Held(static_cast<int>(k)))
       out << " held";

@@ -96,6 +96,7 @@ std::string ValueWithStd(const std::vector<double>& value, const std::vector<dou
   if (value.empty()) return "&ndash;";
   const std::string suffix = unit.unit.empty() ? "" : " " + unit.unit;
   auto one = [&](size_t k) {
+    if (std::isinf(value[k])) return std::string("unobservable");  // a detectable size none reaches
     return General(value[k] * unit.scale) +
            (k < std_dev.size() ? " &plusmn; " + General(std_dev[k] * unit.scale) : std::string()) + suffix;
   };

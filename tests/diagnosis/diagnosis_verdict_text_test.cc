@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,11 @@ TEST(VerdictNoteTest, DetectableSizeIsStatedGivenTheSelectedEffects) {
   EXPECT_NE(given.find("(with motor_lag, acc_bias in the model)"), std::string::npos) << given;
   v.test.screened = true;  // not refined: the screening's note carries the same condition
   EXPECT_NE(VerdictNote(v, options, {kDelay}).find("(with delay in the model)"), std::string::npos);
+  // A coordinate without a column in the scored rows is revealed by no size (not "above 0").
+  v.detectable_above[0] = std::numeric_limits<double>::infinity();
+  EXPECT_NE(VerdictNote(v, options, {}).find("would reveal it above (unobservable, 0.06, 0.03) rad/s"),
+            std::string::npos)
+      << VerdictNote(v, options, {});
 }
 
 // With nothing selected, the "which" line qualifies "the model explains these flights as well as the
