@@ -1,6 +1,7 @@
 #include "rotorid/ident/identify.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -241,6 +242,21 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
                                   "the same fraction of g. Try `rotorid refine --effects acc_bias,misalignment`.");
       }
     }
+  }
+  // Without kd the yaw equation has no rotor term: Mz leaves Table III and the diagnosis's score,
+  // and with it every effect that acts on the yaw moment.
+  if (const int kd = result.system.Column("kd"); kd >= 0 && !solution.essential[kd] &&
+                                                 std::find(options.tls.fixed_zero.begin(), options.tls.fixed_zero.end(),
+                                                           "kd") == options.tls.fixed_zero.end()) {
+    double yaw_rms = 0.0;
+    for (const FlightFit& fit : result.per_flight)
+      yaw_rms = std::max(yaw_rms, fit.excitation.angular_acceleration_rms[2]);
+    result.warnings.push_back(
+        "kd is not identified (" + ShortNumber(solution.rel_std_pct[kd]) +
+        " % std; RMS angular acceleration about z " + ShortNumber(yaw_rms) +
+        " rad/s^2): Mz has no rotor term, so it is left out of Table III and of the diagnosis's held-out score. "
+        "Either the flights' yaw does not fix the yaw equation (fly yaw manoeuvres) or an unmodelled yaw moment "
+        "(a rotor inertia) blurs it; `rotorid diagnose` names the candidates it cannot test there");
   }
   // Parameters the flights leave unidentifiable, named with the excitation that is missing.
   std::string missing;

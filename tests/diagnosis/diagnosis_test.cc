@@ -188,6 +188,16 @@ TEST(DiagnosisTest, EffectActingWhereNothingIsScoredIsNotRuledOut) {
   EXPECT_NE(v.note.find("cannot rule it out"), std::string::npos) << v.note;
   EXPECT_NE(DiagnosisVerdict(d).find("rotor_inertia: not refined"), std::string::npos) << DiagnosisVerdict(d);
   EXPECT_EQ(VerdictOf(d, ParseEffectKind("acc_bias")).unscored, "");  // acts on the forces
+  // identify says why Mz is missing, and what can cause it; not on the clean flight of the same seed.
+  auto kd_warning = [](const IdentificationResult& r) {
+    for (const std::string& w : r.warnings)
+      if (w.rfind("kd is not identified (", 0) == 0) return w;
+    return std::string();
+  };
+  const std::string warning = kd_warning(testing::IdentifySimulated(sim));
+  EXPECT_NE(warning.find("left out of Table III and of the diagnosis's held-out score"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("(a rotor inertia)"), std::string::npos) << warning;
+  EXPECT_EQ(kd_warning(testing::IdentifySimulated(testing::SimulatePreset("A", 30.0, 1, Effects{}))), "");
 }
 
 // A wrong candidate that fits only with absurd values is reported as absorbing something else and is
