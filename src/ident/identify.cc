@@ -255,8 +255,9 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
         "kd is not identified (" + ShortNumber(solution.rel_std_pct[kd]) +
         " % std; RMS angular acceleration about z " + ShortNumber(yaw_rms) +
         " rad/s^2): Mz has no rotor term, so it is left out of Table III and of the diagnosis's held-out score. "
-        "Either the flights' yaw does not fix the yaw equation (fly yaw manoeuvres) or an unmodelled yaw moment "
-        "(a rotor inertia) blurs it; `rotorid diagnose` names the candidates it cannot test there");
+        "Either the flights' yaw does not fix the yaw equation (fly yaw manoeuvres) or an unmodelled effect blurs "
+        "it (a rotor-speed delay or lag, a rotor inertia); `rotorid diagnose` names the candidates it cannot test "
+        "there");
   }
   // Parameters the flights leave unidentifiable, named with the excitation that is missing.
   std::string missing;

@@ -196,7 +196,7 @@ TEST(DiagnosisTest, EffectActingWhereNothingIsScoredIsNotRuledOut) {
   };
   const std::string warning = kd_warning(testing::IdentifySimulated(sim));
   EXPECT_NE(warning.find("left out of Table III and of the diagnosis's held-out score"), std::string::npos) << warning;
-  EXPECT_NE(warning.find("(a rotor inertia)"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("a rotor inertia)"), std::string::npos) << warning;
   EXPECT_EQ(kd_warning(testing::IdentifySimulated(testing::SimulatePreset("A", 30.0, 1, Effects{}))), "");
 }
 
