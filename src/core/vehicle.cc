@@ -5,6 +5,12 @@
 
 namespace rotorid {
 
+double Vehicle::MeanArm() const {
+  double sum = 0.0;
+  for (const Rotor& rotor : rotors) sum += rotor.position_m.head<2>().norm();
+  return rotors.empty() ? 0.0 : sum / static_cast<double>(rotors.size());
+}
+
 double CommandToSpeed::operator()(double u) const {
   return std::max(0.0, coefficients[0] + u * (coefficients[1] + u * coefficients[2]));
 }

@@ -49,13 +49,6 @@ Eigen::MatrixXd NormalInverse(const Eigen::MatrixXd& gram) {
   return inverse_norm.asDiagonal() * pinv * inverse_norm.asDiagonal();
 }
 
-// Mean distance of the rotors from the body's z axis (1 m without rotors).
-double MeanArm(const Vehicle& vehicle) {
-  double sum = 0.0;
-  for (const Rotor& rotor : vehicle.rotors) sum += rotor.position_m.head<2>().norm();
-  return vehicle.rotors.empty() || !(sum > 0.0) ? 1.0 : sum / static_cast<double>(vehicle.rotors.size());
-}
-
 }  // namespace
 
 FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
@@ -177,7 +170,7 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows). Where an effect
     // acts is measured in physical units, forces times the arm (N m): an unscored component's residual
     // is no scale for it (with kd, I_zz and the products discarded, Mz's residual is almost empty).
-    const double arm = MeanArm(flight.vehicle);
+    const double arm = flight.vehicle.MeanArm() > 0.0 ? flight.vehicle.MeanArm() : 1.0;
     const EffectRows model(&flight, effects, kinds, &rotor);
     const size_t coordinates = model.coordinates().size();
     for (Eigen::Index k = 0; k < kept; ++k)

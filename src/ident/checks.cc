@@ -100,7 +100,7 @@ FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
   if (m.thrust_mean > 0.0)
     m.thrust_variation_pct = 100.0 * std::sqrt((thrust.array() - m.thrust_mean).square().mean()) / m.thrust_mean;
   m.thrust_force_correlation = Correlation(thrust, force_z);
-  for (const Rotor& rotor : f.vehicle.rotors) m.arm_m += rotor.position_m.head<2>().norm() / rotors;
+  m.arm_m = f.vehicle.MeanArm();
   // Centred regression (the intercept takes gyroscopic and first-moment terms that do not vary
   // with a single rotor); a tiny ridge keeps it defined when a rotor never varies.
   x.rowwise() -= x.colwise().mean();

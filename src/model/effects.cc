@@ -146,9 +146,7 @@ namespace {
 
 // The size a physical range scales with, for this vehicle.
 double PlausibleScaleOf(PlausibleScale scale, const Vehicle& vehicle) {
-  double arm_m = 0.0;
-  for (const Rotor& rotor : vehicle.rotors) arm_m += rotor.position_m.head<2>().norm();
-  arm_m /= std::max(1, vehicle.num_rotors());
+  const double arm_m = vehicle.MeanArm();
   switch (scale) {
     case PlausibleScale::kNone:
       return 1.0;

@@ -46,6 +46,8 @@ struct Vehicle {
   std::string source = "";
 
   int num_rotors() const { return static_cast<int>(rotors.size()); }
+  // Mean distance of the rotors from the body's z axis (m); 0 without rotors.
+  double MeanArm() const;
   // Empty when valid, else what is wrong.
   std::string Validate() const;
 };
