@@ -190,7 +190,8 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
       }
     offset += kNumWrenchComponents * kept;
   }
-  out.effect_unscored_share = signature_unscored.cwiseQuotient((signature_scored + signature_unscored).cwiseMax(1e-300));
+  out.effect_unscored_share =
+      signature_unscored.cwiseQuotient((signature_scored + signature_unscored).cwiseMax(1e-300));
   double factor = 0.0;
   int scored_components = 0;
   for (int j = 0; j < kNumWrenchComponents; ++j) {
