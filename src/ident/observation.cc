@@ -114,8 +114,12 @@ void CorrectByKnownEffects(const Vehicle& vehicle, ProcessedFlight* flight) {
 
 }  // namespace
 
+Eigen::MatrixXd SpeedFromFilteredSquare(const Eigen::Ref<const Eigen::MatrixXd>& filtered_square) {
+  return filtered_square.cwiseMax(0.0).cwiseSqrt();
+}
+
 Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared) {
-  return FiltFiltColumns(filter, omega_squared).cwiseMax(0.0).cwiseSqrt();
+  return SpeedFromFilteredSquare(FiltFiltColumns(filter, omega_squared));
 }
 
 ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,

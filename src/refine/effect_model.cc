@@ -96,34 +96,38 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
       jets[coordinates[c].link][coordinates[c].index].v[c - first] = 1.0;
   }
   // One rotor at a time (the chain and the filters act on each alone): the Jet signal of every
-  // sample is one column, not the flight's rotors.
-  const auto column_at_rows = [&](const Eigen::MatrixXd& series, Eigen::MatrixXd* sampled, Eigen::Index rotor) {
-    for (int r = 0; r < rows; ++r) (*sampled)(r, rotor) = series(flight.row_samples[r], 0);
-  };
+  // sample is one column, not the flight's rotors. The low-pass is linear: y^2 and each of its
+  // derivatives filter separately, side by side in one call.
+  const Eigen::Index num_coordinates = static_cast<Eigen::Index>(coordinates.size());
+  Eigen::MatrixXd squared(n, 1 + num_coordinates);  // y^2, then its derivatives
   for (Eigen::Index rotor = 0; rotor < rotors; ++rotor) {
-    Eigen::MatrixXd half_inverse_speed;
     for (size_t b = 0; b < blocks.size(); ++b) {
       std::vector<const RotorJet*> parameters;
       for (const auto& j : blocks[b]) parameters.push_back(j.data());
       const Eigen::Matrix<RotorJet, Eigen::Dynamic, 1> signal =
           TransformRotor<RotorJet>(flight, chain, parameters, rotor);
-      // The low-pass is linear: filter the value and each derivative of y^2 separately.
-      if (b == 0) {
-        Eigen::MatrixXd squared(n, 1);
+      if (b == 0)
         for (Eigen::Index k = 0; k < n; ++k) squared(k, 0) = (signal[k] * signal[k]).a;
-        const Eigen::MatrixXd speed = FilteredRotorSpeed(flight.filter, squared);
-        column_at_rows(speed, &out.speed, rotor);
-        column_at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration, rotor);
-        // d sqrt(z) = dz / (2 sqrt(z)): the same factor for every coordinate.
-        half_inverse_speed = (speed.array() > 0.0).select(0.5 * speed.cwiseInverse(), 0.0);
-      }
       const size_t first = b * kRotorJetSize;
       for (size_t c = first; c < std::min(coordinates.size(), first + kRotorJetSize); ++c) {
-        Eigen::MatrixXd d_squared(n, 1);
-        for (Eigen::Index k = 0; k < n; ++k) d_squared(k, 0) = (signal[k] * signal[k]).v[c - first];
-        const Eigen::MatrixXd d_speed = FiltFiltColumns(flight.filter, d_squared).cwiseProduct(half_inverse_speed);
-        column_at_rows(d_speed, &out.derivative[c], rotor);
-        column_at_rows(FourthOrderCentralDifference(d_speed, flight.dt_s), &out.acceleration_derivative[c], rotor);
+        double* column = squared.col(1 + static_cast<Eigen::Index>(c)).data();
+        for (Eigen::Index k = 0; k < n; ++k) column[k] = (signal[k] * signal[k]).v[c - first];
+      }
+    }
+    Eigen::MatrixXd filtered = FiltFiltColumns(flight.filter, squared);
+    filtered.col(0) = SpeedFromFilteredSquare(filtered.col(0));
+    // d sqrt(z) = dz / (2 sqrt(z)): the same factor for every coordinate.
+    const Eigen::ArrayXd half_inverse_speed =
+        (filtered.col(0).array() > 0.0).select(0.5 * filtered.col(0).array().inverse(), 0.0);
+    for (Eigen::Index c = 1; c <= num_coordinates; ++c) filtered.col(c).array() *= half_inverse_speed;
+    const Eigen::MatrixXd rate = FourthOrderCentralDifference(filtered, flight.dt_s);
+    for (int r = 0; r < rows; ++r) {
+      const Eigen::Index i = flight.row_samples[r];
+      out.speed(r, rotor) = filtered(i, 0);
+      out.acceleration(r, rotor) = rate(i, 0);
+      for (Eigen::Index c = 0; c < num_coordinates; ++c) {
+        out.derivative[c](r, rotor) = filtered(i, 1 + c);
+        out.acceleration_derivative[c](r, rotor) = rate(i, 1 + c);
       }
     }
   }

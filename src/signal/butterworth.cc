@@ -1,6 +1,7 @@
 #include "rotorid/signal/butterworth.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <sstream>
@@ -188,25 +189,6 @@ SosFilter DesignButterworth(const ButterworthOptions& options, double sample_rat
 
 namespace {
 
-// Direct form II transposed cascade over `count` samples data[0], data[step], data[2 step], ... in
-// place. `state` holds (z1, z2) per section and is updated, so passes can be chained.
-void RunCascade(const std::vector<Biquad>& sections, double* state, double* data, Eigen::Index count,
-                Eigen::Index step) {
-  const std::size_t section_count = sections.size();
-  for (Eigen::Index i = 0; i < count; ++i, data += step) {
-    double value = *data;
-    for (std::size_t s = 0; s < section_count; ++s) {
-      const Biquad& q = sections[s];
-      double* z = state + 2 * s;
-      const double out = q.b0 * value + z[0];
-      z[0] = q.b1 * value - q.a1 * out + z[1];
-      z[1] = q.b2 * value - q.a2 * out;
-      value = out;
-    }
-    *data = value;
-  }
-}
-
 // Steady-state section states for a unit step input (scipy.signal.sosfilt_zi): section s sees the
 // constant H_0(1)...H_{s-1}(1) and its DF2T states then satisfy z2 = b2 u - a2 y, z1 = b1 u - a1 y + z2.
 std::vector<double> StepSteadyState(const std::vector<Biquad>& sections) {
@@ -234,46 +216,81 @@ Eigen::Index DefaultPadLength(const std::vector<Biquad>& sections) {
   return 3 * taps;
 }
 
+// Direct form II transposed cascade over `count` rows of kLanes interleaved columns (row i of
+// lane l at data[i * kLanes + l]), in place, forward or backward. The recursion is a chain of
+// dependent multiply-adds per column; running kLanes columns side by side keeps the multipliers
+// busy, and each lane does exactly the operations of one column alone.
+template <int kLanes>
+void RunCascadeLanes(const std::vector<Biquad>& sections, std::array<double, kLanes>* state, double* data,
+                     Eigen::Index count, bool backward) {
+  const std::size_t section_count = sections.size();
+  double* row = backward ? data + (count - 1) * kLanes : data;
+  const Eigen::Index step = backward ? -kLanes : kLanes;
+  for (Eigen::Index i = 0; i < count; ++i, row += step) {
+    double value[kLanes];
+    for (int l = 0; l < kLanes; ++l) value[l] = row[l];
+    for (std::size_t s = 0; s < section_count; ++s) {
+      const Biquad& q = sections[s];
+      std::array<double, kLanes>& z1 = state[2 * s];
+      std::array<double, kLanes>& z2 = state[2 * s + 1];
+      for (int l = 0; l < kLanes; ++l) {
+        const double out = q.b0 * value[l] + z1[l];
+        z1[l] = q.b1 * value[l] - q.a1 * out + z2[l];
+        z2[l] = q.b2 * value[l] - q.a2 * out;
+        value[l] = out;
+      }
+    }
+    for (int l = 0; l < kLanes; ++l) row[l] = value[l];
+  }
+}
+
 // Reusable buffers and per-filter constants, so that filtering many columns allocates once.
 class ZeroPhaseFilter {
  public:
   explicit ZeroPhaseFilter(const SosFilter& filter)
       : sections_(filter.sections),
         steady_state_(StepSteadyState(filter.sections)),
-        state_(steady_state_.size()),
         default_pad_(DefaultPadLength(filter.sections)) {}
 
-  void Apply(const double* x, Eigen::Index n, double* y) {
+  // kLanes columns of n samples each, starting at x + l * x_stride, into y + l * y_stride.
+  template <int kLanes>
+  void Apply(const double* x, Eigen::Index x_stride, Eigen::Index n, double* y, Eigen::Index y_stride) {
     if (n <= 1) {
-      std::copy(x, x + n, y);
+      for (int l = 0; l < kLanes; ++l) std::copy(x + l * x_stride, x + l * x_stride + n, y + l * y_stride);
       return;
     }
     const Eigen::Index pad = std::min(default_pad_, n - 1);
-    extended_.resize(static_cast<std::size_t>(n + 2 * pad));
-    double* ext = extended_.data();
     const Eigen::Index ext_size = n + 2 * pad;
+    extended_.resize(static_cast<std::size_t>(ext_size * kLanes));
+    double* ext = extended_.data();
     // Odd extension: the edges are continued point-symmetrically, which keeps value and slope.
-    std::copy(x, x + n, ext + pad);
-    for (Eigen::Index i = 1; i <= pad; ++i) {
-      ext[pad - i] = 2.0 * x[0] - x[i];
-      ext[pad + n - 1 + i] = 2.0 * x[n - 1] - x[n - 1 - i];
+    for (int l = 0; l < kLanes; ++l) {
+      const double* xl = x + l * x_stride;
+      for (Eigen::Index i = 0; i < n; ++i) ext[(pad + i) * kLanes + l] = xl[i];
+      for (Eigen::Index i = 1; i <= pad; ++i) {
+        ext[(pad - i) * kLanes + l] = 2.0 * xl[0] - xl[i];
+        ext[(pad + n - 1 + i) * kLanes + l] = 2.0 * xl[n - 1] - xl[n - 1 - i];
+      }
     }
     // Forward pass starting as if the first sample had always been there, then backward likewise.
-    SetState(ext[0]);
-    RunCascade(sections_, state_.data(), ext, ext_size, 1);
-    SetState(ext[ext_size - 1]);
-    RunCascade(sections_, state_.data(), ext + ext_size - 1, ext_size, -1);
-    std::copy(ext + pad, ext + pad + n, y);
+    std::vector<std::array<double, kLanes>> state(steady_state_.size());
+    SetState<kLanes>(ext, state.data());
+    RunCascadeLanes<kLanes>(sections_, state.data(), ext, ext_size, false);
+    SetState<kLanes>(ext + (ext_size - 1) * kLanes, state.data());
+    RunCascadeLanes<kLanes>(sections_, state.data(), ext, ext_size, true);
+    for (int l = 0; l < kLanes; ++l)
+      for (Eigen::Index i = 0; i < n; ++i) y[l * y_stride + i] = ext[(pad + i) * kLanes + l];
   }
 
  private:
-  void SetState(double level) {
-    for (std::size_t i = 0; i < state_.size(); ++i) state_[i] = steady_state_[i] * level;
+  template <int kLanes>
+  void SetState(const double* level, std::array<double, kLanes>* state) const {
+    for (std::size_t i = 0; i < steady_state_.size(); ++i)
+      for (int l = 0; l < kLanes; ++l) state[i][l] = steady_state_[i] * level[l];
   }
 
   const std::vector<Biquad>& sections_;
   std::vector<double> steady_state_;
-  std::vector<double> state_;
   std::vector<double> extended_;
   Eigen::Index default_pad_;
 };
@@ -282,22 +299,28 @@ class ZeroPhaseFilter {
 
 Eigen::VectorXd SosFilterCausal(const SosFilter& filter, const Eigen::Ref<const Eigen::VectorXd>& x) {
   Eigen::VectorXd y = x;
-  std::vector<double> state(2 * filter.sections.size(), 0.0);
-  RunCascade(filter.sections, state.data(), y.data(), y.size(), 1);
+  std::vector<std::array<double, 1>> state(2 * filter.sections.size(), {0.0});
+  RunCascadeLanes<1>(filter.sections, state.data(), y.data(), y.size(), false);
   return y;
 }
 
 Eigen::VectorXd FiltFilt(const SosFilter& filter, const Eigen::Ref<const Eigen::VectorXd>& x) {
   Eigen::VectorXd y(x.size());
-  ZeroPhaseFilter(filter).Apply(x.data(), x.size(), y.data());
+  ZeroPhaseFilter(filter).Apply<1>(x.data(), x.size(), x.size(), y.data(), y.size());
   return y;
 }
 
 Eigen::MatrixXd FiltFiltColumns(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& x) {
   Eigen::MatrixXd y(x.rows(), x.cols());
   ZeroPhaseFilter zero_phase(filter);
-  // Columns of a column-major Ref are contiguous (inner stride 1).
-  for (Eigen::Index c = 0; c < x.cols(); ++c) zero_phase.Apply(x.col(c).data(), x.rows(), y.col(c).data());
+  // Columns of a column-major Ref are contiguous (inner stride 1), outer stride apart.
+  constexpr int kLanes = 4;
+  const Eigen::Index n = x.rows(), cols = x.cols();
+  Eigen::Index c = 0;
+  for (; c + kLanes <= cols; c += kLanes)
+    zero_phase.Apply<kLanes>(x.col(c).data(), x.outerStride(), n, y.col(c).data(), n);
+  for (; c + 2 <= cols; c += 2) zero_phase.Apply<2>(x.col(c).data(), x.outerStride(), n, y.col(c).data(), n);
+  for (; c < cols; ++c) zero_phase.Apply<1>(x.col(c).data(), x.outerStride(), n, y.col(c).data(), n);
   return y;
 }
 

@@ -205,6 +205,15 @@ TEST(FiltFilt, ColumnsAreFilteredIndependently) {
   const Eigen::MatrixXd block = big.block(10, 1, 200, 2);
   EXPECT_EQ(FiltFiltColumns(filter, big.block(10, 1, 200, 2)), FiltFiltColumns(filter, block));
   EXPECT_EQ(FiltFiltColumns(filter, Eigen::MatrixXd(0, 3)).cols(), 3);
+  // Columns run four (then two) side by side: each must still come out as if filtered alone, from
+  // a block view as well, and for every length down to the shortest.
+  Eigen::MatrixXd wide(400, 9);
+  wide.setRandom();
+  for (const Eigen::Index rows : {Eigen::Index{1}, Eigen::Index{2}, Eigen::Index{5}, Eigen::Index{300}}) {
+    const Eigen::MatrixXd y_wide = FiltFiltColumns(filter, wide.block(7, 1, rows, 7));
+    for (Eigen::Index c = 0; c < 7; ++c)
+      EXPECT_EQ(y_wide.col(c), FiltFilt(filter, wide.block(7, 1 + c, rows, 1))) << rows << " rows, column " << c;
+  }
 }
 
 }  // namespace

@@ -86,7 +86,10 @@ struct ProcessedFlight {
 // "<config>.<label>.ms_x" for a first moment of its own.
 std::string BodyParameterName(const ProcessedFlight& flight, int k);
 
-// sqrt(filtfilt(Omega^2)) per column: the rotor signal that enters the rows.
+// sqrt(filtfilt(Omega^2)) per column: the rotor signal that enters the rows. The second step alone
+// (a filtered square can dip below 0 near a stop: read as 0) for callers that filter more columns
+// alongside.
+Eigen::MatrixXd SpeedFromFilteredSquare(const Eigen::Ref<const Eigen::MatrixXd>& filtered_square);
 Eigen::MatrixXd FilteredRotorSpeed(const SosFilter& filter, const Eigen::Ref<const Eigen::MatrixXd>& omega_squared);
 
 // Longest time step (in median sample intervals) that ProcessFlight interpolates across; a longer
