@@ -244,7 +244,7 @@ void RunCascadeLanes(const std::vector<Biquad>& sections, std::array<double, kLa
   }
 }
 
-// Reusable buffers and per-filter constants, so that filtering many columns allocates once.
+// Per-filter constants and the extension buffer, reused for every group of columns.
 class ZeroPhaseFilter {
  public:
   explicit ZeroPhaseFilter(const SosFilter& filter)
