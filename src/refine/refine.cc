@@ -406,7 +406,9 @@ void SolveEffectProblem(const RefineOptions& options, ceres::Problem* problem, R
   // 1 h log). The steps differ in round-off only; the solution within the tolerances below.
   solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver_options.max_num_iterations = options.max_iterations;
-  solver_options.function_tolerance = 1e-12;
+  // A relative cost change of 1e-10 per step: stopping there moved no refined parameter or effect by
+  // more than 1e-3 of its std against 1e-12 (refine, diagnose), and saves a quarter of the iterations.
+  solver_options.function_tolerance = 1e-10;
   solver_options.gradient_tolerance = 1e-14;
   solver_options.parameter_tolerance = 1e-12;
   solver_options.num_threads = options.num_threads;
@@ -426,6 +428,9 @@ void SolveEffectProblem(const RefineOptions& options, ceres::Problem* problem, R
   result->solver.termination = TerminationName(summary.termination_type);
   result->solver.message = summary.message;
   result->solver.full_report = summary.FullReport();
+  LOG(INFO) << "refinement pass: " << result->solver.iterations << " iterations (" << summary.num_residual_evaluations
+            << " cost and " << summary.num_jacobian_evaluations << " Jacobian evaluations), "
+            << result->solver.seconds << " s, " << result->solver.termination;
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);
 }
 
