@@ -63,6 +63,7 @@ Command AddRefineCommand(CLI::App& root) {
     RefineOptions refine;
   };
   auto options = std::make_shared<Options>();
+  options->refine.num_threads = 2;  // as delay and diagnose: the Ceres evaluations and the delay grid on 2 cores
   Command command;
   command.app = root.add_subcommand(
       "refine",
