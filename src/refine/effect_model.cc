@@ -134,6 +134,21 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
   return out;
 }
 
+Eigen::MatrixXd EffectiveRotorSpeedAtRows(const ProcessedFlight& flight, const Effects& effects) {
+  const EffectChain acting = ActingEffects(effects, EffectStage::kRotorSignal);
+  const int rows = flight.num_rows_samples();
+  Eigen::MatrixXd speed(rows, flight.rotor_raw.cols());
+  if (acting.kinds.empty()) {
+    for (int r = 0; r < rows; ++r) speed.row(r) = flight.rotor.row(flight.row_samples[r]);
+    return speed;
+  }
+  // As EffectiveRotorAtRows, with the square root taken at the row samples only.
+  const Eigen::MatrixXd filtered_square = FiltFiltColumns(
+      flight.filter, TransformRotors(flight, acting.kinds, acting.Parameters()).array().square().matrix());
+  for (int r = 0; r < rows; ++r) speed.row(r) = filtered_square.row(flight.row_samples[r]);
+  return SpeedFromFilteredSquare(speed);
+}
+
 Eigen::MatrixXd BuildIdimMatrixWithEffects(const ProcessedFlight& flight, const Effects& effects) {
   const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
   const internal::EffectRows rows(&flight, effects, {}, &rotor);

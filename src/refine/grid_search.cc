@@ -56,7 +56,7 @@ class RotorSignalGrid {
       (changes ? changing_ : fixed_).push_back(column);
     }
     sqrt_weight_ = solution.row_weight.cwiseSqrt();
-    fixed_qr_.compute(sqrt_weight_.asDiagonal() * SystemColumnsWithEffects(linear, trial, fixed_));
+    FactorFixedColumns(sqrt_weight_.asDiagonal() * SystemColumnsWithEffects(linear, trial, fixed_));
   }
 
   double Criterion(double value) const {
@@ -67,14 +67,15 @@ class RotorSignalGrid {
     Eigen::MatrixXd changing =
         sqrt_weight_.asDiagonal() *
         (wrench_acts_ ? SystemColumnsWithEffects(linear_, trial, changing_) : RotorColumns(trial));
-    changing.applyOnTheLeft(fixed_qr_.householderQ().adjoint());
-    const Eigen::HouseholderQR<Eigen::MatrixXd> rest(changing.bottomRows(changing.rows() - n_fixed));
+    changing.noalias() -= reflectors_ * (block_factor_.transpose() * (reflectors_.transpose() * changing));  // Q_B^T A
+    Eigen::Ref<Eigen::MatrixXd> rest = changing.bottomRows(changing.rows() - n_fixed);
+    const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> rest_qr(rest);  // in place: no copy of the rows
     // The factor in the order [fixed, changing], then its columns back in the criterion's order.
     Eigen::MatrixXd factor = Eigen::MatrixXd::Zero(n_fixed + n_changing, n_fixed + n_changing);
-    factor.topLeftCorner(n_fixed, n_fixed) = fixed_qr_.matrixQR().topRows(n_fixed).triangularView<Eigen::Upper>();
+    factor.topLeftCorner(n_fixed, n_fixed) = fixed_r_;
     factor.topRightCorner(n_fixed, n_changing) = changing.topRows(n_fixed);
     factor.bottomRightCorner(n_changing, n_changing) =
-        rest.matrixQR().topRows(n_changing).triangularView<Eigen::Upper>();
+        rest_qr.matrixQR().topRows(n_changing).triangularView<Eigen::Upper>();
     const std::vector<int> columns = CriterionColumns(linear_.solution);
     Eigen::MatrixXd ordered(factor.rows(), factor.cols());
     for (Eigen::Index k = 0; k < factor.cols(); ++k) {
@@ -92,9 +93,10 @@ class RotorSignalGrid {
     Eigen::MatrixXd out(linear_.system.w.rows(), static_cast<Eigen::Index>(changing_.size()));
     Eigen::Index row = 0;
     for (const ProcessedFlight& flight : linear_.flights) {
-      const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
+      const Eigen::MatrixXd rotor_speed = EffectiveRotorSpeedAtRows(flight, effects);
+      Eigen::VectorXd speed(rotor_speed.cols());
       for (int r = 0; r < flight.num_rows_samples(); ++r, row += 6) {
-        const Eigen::VectorXd speed = rotor.speed.row(r).transpose();
+        speed = rotor_speed.row(r).transpose();
         const Eigen::Matrix<double, 6, kNumRotorCoefficients> columns = -RotorRegressor<double>(speed, flight.vehicle);
         for (size_t k = 0; k < changing_.size(); ++k)
           out.block<6, 1>(row, static_cast<Eigen::Index>(k)) = columns.col(changing_[k]);
@@ -103,13 +105,37 @@ class RotorSignalGrid {
     return out;
   }
 
+  // B = Q_B [R_B; 0] by Householder QR, kept as R_B and Q_B = I - V T V^T in the compact WY form
+  // (LAPACK's larft): Q_B^T A is then two products over the rows, one pass each through V and A,
+  // where applying the reflectors one by one passes through A once per reflector (on a 1 h log A is
+  // 70 MB, and that was a third of the grid's time).
+  void FactorFixedColumns(Eigen::MatrixXd columns) {
+    const Eigen::Index k = columns.cols();
+    const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(columns);  // in place
+    fixed_r_ = qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+    const Eigen::VectorXd tau = qr.hCoeffs();
+    for (Eigen::Index j = 0; j < k; ++j) {  // V: the reflectors, unit lower trapezoidal
+      columns.col(j).head(j).setZero();
+      columns(j, j) = 1.0;
+    }
+    const Eigen::MatrixXd gram = columns.transpose() * columns;  // V^T V
+    block_factor_ = Eigen::MatrixXd::Zero(k, k);
+    for (Eigen::Index i = 0; i < k; ++i) {
+      block_factor_(i, i) = tau[i];
+      if (i == 0) continue;
+      const Eigen::VectorXd product = block_factor_.topLeftCorner(i, i) * gram.col(i).head(i);  // T upper so far
+      block_factor_.col(i).head(i) = -tau[i] * product;
+    }
+    reflectors_ = std::move(columns);
+  }
+
   const IdentificationResult& linear_;
   const Effects& base_;
   EffectKind kind_;
   bool wrench_acts_ = false;
   std::vector<int> fixed_, changing_;  // criterion columns; changing_ are rotor columns, then the known one
   Eigen::VectorXd sqrt_weight_;
-  Eigen::HouseholderQR<Eigen::MatrixXd> fixed_qr_;
+  Eigen::MatrixXd fixed_r_, reflectors_, block_factor_;  // R_B, V, T
 };
 
 }  // namespace

@@ -36,6 +36,9 @@ struct EffectiveRotor {
 };
 EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects& effects,
                                     const std::vector<EffectKind>& free);
+// EffectiveRotorAtRows(flight, effects, {}).speed alone: no acceleration, no derivatives (the delay
+// grid's rotor columns, evaluated at every grid value).
+Eigen::MatrixXd EffectiveRotorSpeedAtRows(const ProcessedFlight& flight, const Effects& effects);
 
 // The IMU signals of sample i of a flight, as the log has them (filtered).
 template <typename T>
