@@ -199,13 +199,22 @@ bool IdimResidualBlock::Evaluate(double const* const* parameters, double* residu
   for (size_t b = 0; jacobians && b < blocks_->free.size(); ++b) effect_jacobians |= jacobians[1 + b] != nullptr;
   if (!effect_jacobians || coordinates == 0) {
     EvaluatePass<double>(point, 0, residuals, jacobians);
-  } else if (coordinates <= static_cast<size_t>(kImuJetSize)) {
-    EvaluatePass<ImuJet>(point, 0, residuals, jacobians);
-  } else if (coordinates <= static_cast<size_t>(kMidImuJetSize)) {
-    EvaluatePass<MidImuJet>(point, 0, residuals, jacobians);
-  } else {
-    for (size_t first = 0; first < coordinates; first += kWideImuJetSize)
+    return true;
+  }
+  // Passes of the widest Jet while more coordinates remain than the middle one holds, then the
+  // narrowest that takes the rest (13 coordinates: 12 + 1 in a Jet of 4, not two Jets of 12).
+  for (size_t first = 0; first < coordinates;) {
+    const size_t remaining = coordinates - first;
+    if (remaining <= static_cast<size_t>(kImuJetSize)) {
+      EvaluatePass<ImuJet>(point, first, residuals, jacobians);
+      first += kImuJetSize;
+    } else if (remaining <= static_cast<size_t>(kMidImuJetSize)) {
+      EvaluatePass<MidImuJet>(point, first, residuals, jacobians);
+      first += kMidImuJetSize;
+    } else {
       EvaluatePass<WideImuJet>(point, first, residuals, jacobians);
+      first += kWideImuJetSize;
+    }
   }
   return true;
 }
