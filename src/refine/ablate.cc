@@ -65,7 +65,7 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
   // alike. The residuals are whitened by the linear step's weights and metric for every subset
   // (refined_criterion): each refinement's own final cost is not comparable across subsets, since
   // re-running the TLS on effect-corrected rows re-estimates the weights.
-  const double rows = static_cast<double>(linear.system.w.rows());
+  const double rows = static_cast<double>(linear.system.num_rows());
   const double factor = std::max(1.0, out.entries.back().result.autocorrelation_factor);
   out.effective_samples = rows / factor;
   for (AblationEntry& entry : out.entries) {

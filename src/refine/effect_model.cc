@@ -143,8 +143,9 @@ Eigen::MatrixXd EffectiveRotorSpeedAtRows(const ProcessedFlight& flight, const E
     return speed;
   }
   // As EffectiveRotorAtRows, with the square root taken at the row samples only.
-  const Eigen::MatrixXd filtered_square = FiltFiltColumns(
-      flight.filter, TransformRotors(flight, acting.kinds, acting.Parameters()).array().square().matrix());
+  Eigen::MatrixXd square = TransformRotors(flight, acting.kinds, acting.Parameters());
+  square = square.array().square();
+  const Eigen::MatrixXd filtered_square = FiltFiltColumns(flight.filter, square);
   for (int r = 0; r < rows; ++r) speed.row(r) = filtered_square.row(flight.row_samples[r]);
   return SpeedFromFilteredSquare(speed);
 }

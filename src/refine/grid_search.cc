@@ -19,7 +19,7 @@ std::vector<double> SearchGrid(double min, double max, double step) {
 Eigen::MatrixXd SystemColumnsWithEffects(const IdentificationResult& linear, const Effects& effects,
                                          const std::vector<int>& columns) {
   const IdimSystem& system = linear.system;
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(system.w.rows(), static_cast<Eigen::Index>(columns.size()));
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(system.num_rows(), static_cast<Eigen::Index>(columns.size()));
   Eigen::Index row = 0;
   for (int f = 0; f < system.num_flights(); ++f) {
     const Eigen::MatrixXd wf = BuildIdimMatrixWithEffects(linear.flights[f], effects);
@@ -90,7 +90,7 @@ class RotorSignalGrid {
   // rows with `effects`, -D_k at the effective rotor speeds as IdimRows writes them, without the
   // body columns that IMU-only work would build for nothing.
   Eigen::MatrixXd RotorColumns(const Effects& effects) const {
-    Eigen::MatrixXd out(linear_.system.w.rows(), static_cast<Eigen::Index>(changing_.size()));
+    Eigen::MatrixXd out(linear_.system.num_rows(), static_cast<Eigen::Index>(changing_.size()));
     Eigen::Index row = 0;
     for (const ProcessedFlight& flight : linear_.flights) {
       const Eigen::MatrixXd rotor_speed = EffectiveRotorSpeedAtRows(flight, effects);

@@ -29,8 +29,8 @@ Eigen::MatrixXd CentredRotorMoments(const RotorMomentAnchor& anchor, const Eigen
 
 }  // namespace
 
-RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSystem& system, int index, int first_row,
-                                     const Eigen::VectorXd& chi) {
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const Effects& effects, const IdimLayout& system,
+                                     int index, const Eigen::VectorXd& chi) {
   RotorMomentAnchor anchor;
   const int rotors = flight.vehicle.num_rotors();
   anchor.unit = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, rotors);
@@ -44,20 +44,30 @@ RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSy
   const int samples = flight.num_rows_samples();
   Eigen::VectorXd chi_t(chi.size() + 1);
   chi_t << chi, 1.0;
+  Eigen::Matrix<double, kNumIdimColumns, 1> flight_chi;  // chi_t in the columns of the flight's own rows
+  flight_chi << chi[0], chi[1], Eigen::Matrix<double, kNumBodyParameters, 1>::Zero(), 1.0;
+  for (int k = 0; k < kNumBodyParameters; ++k)
+    flight_chi[kNumRotorCoefficients + k] = chi[system.flight_body_columns[static_cast<size_t>(index)][k]];
+  const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
+  const EffectRows rows(&flight, effects, {}, &rotor);
+  const EffectRows::PassValues<double> pass = rows.Pass<double>();
+  std::array<double, 6> residual{};
+  for (int s = 0; s < samples; ++s) {
+    const Eigen::Matrix<double, 6, kNumIdimColumns> w = rows.Rows<double>(s, pass);
+    for (int c = 3; c < 6; ++c) residual[c] += std::pow(w.row(c).dot(flight_chi), 2);
+  }
   Eigen::VectorXd rotor_t = Eigen::VectorXd::Zero(chi_t.size());
   rotor_t.head<kNumRotorCoefficients>() = chi.head<kNumRotorCoefficients>();
   for (int c = 3; c < 6; ++c) {
     anchor.power[c] = moments.col(c).squaredNorm();
     // Per-row variances at the start: the residual, the noise model's share of it, and the rotor
     // signal's part of that.
-    double residual = 0.0;
-    for (int s = 0; s < samples; ++s) residual += std::pow(system.w.row(first_row + 6 * s + c).dot(chi_t), 2);
-    residual /= std::max(samples, 1);
+    const double mean_residual = residual[c] / std::max(samples, 1);
     const Eigen::MatrixXd& noise_cov = system.group_noise_cov[static_cast<size_t>(6 * index + c)];
     const double noise = std::max(chi_t.dot(noise_cov * chi_t), 0.0) / std::max(samples, 1);
     const double rotor_noise = std::clamp(rotor_t.dot(noise_cov * rotor_t) / std::max(samples, 1), 0.0, noise);
-    const double scaling = std::max(residual - noise, 0.0) + rotor_noise;
-    const double total = std::max(residual, noise);
+    const double scaling = std::max(mean_residual - noise, 0.0) + rotor_noise;
+    const double total = std::max(mean_residual, noise);
     anchor.share[c] = total > 0.0 ? std::clamp(scaling / total, 0.0, 1.0) : 1.0;
   }
   LOG(INFO) << "anchored criterion, " << flight.source << ": share of the residual that scales with the rotor moment "

@@ -46,9 +46,10 @@ struct RotorMomentAnchor {
   std::array<double, 6> share{};  // s_c
   Eigen::Matrix<double, 6, Eigen::Dynamic> unit;  // u_ci
 };
-// `flight` is flight `index` of `system`, its rows from `first_row` of system.w; chi the start.
-RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const IdimSystem& system, int index,
-                                     int first_row, const Eigen::VectorXd& chi);
+// `flight` is flight `index` of `system`, whose rows are the flight's with `effects` (evaluated here
+// one row sample at a time: no W needed); chi the start.
+RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const Effects& effects, const IdimLayout& system,
+                                     int index, const Eigen::VectorXd& chi);
 
 // The rotor signal of one flight at its row samples after the rotor-signal effects, with
 // derivatives with respect to the free ones, recomputed (once, under a lock) whenever Ceres

@@ -338,17 +338,14 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
 }
 
 // The anchored criterion's anchor of each flight at tls.chi (none for the TLS criterion), from the
-// rows of `system`, which a pass needs no further.
+// flights' rows with `effects` (those the TLS `tls` was solved on).
 std::vector<internal::RotorMomentAnchor> AnchorFlights(const std::vector<ProcessedFlight>& flights,
-                                                       const IdimSystem& system, const TlsSolution& tls,
-                                                       const RefineOptions& options) {
+                                                       const Effects& effects, const IdimLayout& system,
+                                                       const TlsSolution& tls, const RefineOptions& options) {
   std::vector<internal::RotorMomentAnchor> anchors;
   if (options.criterion != "anchored") return anchors;
-  int row = 0;
-  for (int f = 0; f < system.num_flights(); ++f) {
-    anchors.push_back(internal::AnchorRotorMoments(flights[f], system, f, row, tls.chi));
-    row += 6 * flights[f].num_rows_samples();
-  }
+  for (int f = 0; f < system.num_flights(); ++f)
+    anchors.push_back(internal::AnchorRotorMoments(flights[f], effects, system, f, tls.chi));
   return anchors;
 }
 
@@ -767,7 +764,9 @@ double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions
   const std::vector<double> grid = options.delay_search.Grid();
   const std::vector<double> criterion =
       internal::CriterionOverGrid(linear, options.initial, kind, grid, options.num_threads);
-  return grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
+  const double best = grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
+  LOG(INFO) << "coarse search of " << kind->parameter_name() << " over " << grid.size() << " values: " << best;
+  return best;
 }
 
 namespace {
@@ -805,7 +804,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     step_done();
   }
   RefineResult result = SolveEffects(linear.flights, linear.system,
-                                     AnchorFlights(linear.flights, linear.system, linear.solution, options),
+                                     AnchorFlights(linear.flights, Effects{}, linear.system, linear.solution, options),
                                      linear.solution, start, options);
   step_done();
   if (options.reselect_essential && !options.effects.empty()) {
@@ -817,9 +816,10 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     for (int pass = 2; pass <= kMaxRefinePasses; ++pass) {
       IdimSystem corrected{linear.system, SystemRowsWithEffects(linear, result.effects)};
       TlsSolution reselected = SolveIdim(corrected, linear.options.tls);
-      if (!reselected.usable) break;
-      std::vector<internal::RotorMomentAnchor> anchors = AnchorFlights(linear.flights, corrected, reselected, options);
       corrected.w = Eigen::MatrixXd();  // the pass needs its layout only; the rows are 100 MB on a 1 h log
+      if (!reselected.usable) break;
+      std::vector<internal::RotorMomentAnchor> anchors =
+          AnchorFlights(linear.flights, result.effects, corrected, reselected, options);
       RefineOptions next = options;
       next.coarse_delay_search = false;
       RefineResult candidate =

@@ -52,7 +52,7 @@ TEST_P(IdimResidualBlockTest, PassesGradientChecker) {
   blocks.free = AllEffects();
   // The anchored criterion divides the moment rows by the rotor-signal effects' gain on the rotor
   // moment (not 1 at this point: the lag is 3 % of its range).
-  internal::RotorMomentAnchor anchor = internal::AnchorRotorMoments(flight, linear.system, 0, 0, linear.solution.chi);
+  internal::RotorMomentAnchor anchor = internal::AnchorRotorMoments(flight, Effects{}, linear.system, 0, linear.solution.chi);
   anchor.share = {0, 0, 0, 0.9, 0.5, 0.7};  // a generic mix of scaled and unscaled residual
   internal::RotorSignalCache cache(&flight, &blocks, GetParam() == "anchored" ? &anchor : nullptr);
   internal::CriterionContext context;
