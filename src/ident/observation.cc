@@ -164,7 +164,6 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   out.filter = filter;
   out.rotor_raw = InterpolateLinear(log.t_s, log.rotor_radps, out.t_s);
   out.rotor = FilteredRotorSpeed(filter, out.rotor_raw.array().square().matrix());
-  out.rotor_acceleration = FourthOrderCentralDifference(out.rotor, dt);
   if (log.rotor_command)
     out.rotor_command = InterpolateLinear(log.t_s, *log.rotor_command, out.t_s);  // raw, as rotor_raw
   if (log.voltage_v)
@@ -231,8 +230,6 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
     out.noise.angular_velocity = angle_noise * gain1;
     out.noise.angular_acceleration = angle_noise * gain2;
   }
-  out.specific_force_rate = FourthOrderCentralDifference(out.specific_force, dt);
-  out.specific_force_rate2 = FourthOrderCentralDifference(out.specific_force_rate, dt);
   for (int i = trim; i < n - trim; i += step) out.row_samples.push_back(i);
   return out;
 }
@@ -243,7 +240,7 @@ FlightInputs ProcessedFlight::inputs() const {
   available.height = height_m.has_value() && rotor_height_m.has_value();
   available.rotor_radius = vehicle.rotor_radius_m.has_value();
   available.voltage = voltage_v.has_value();
-  available.rotor_acceleration = rotor_acceleration.rows() == rotor.rows() && rotor.rows() > 0;
+  available.rotor_acceleration = rotor.rows() >= 3;  // differentiable at every row sample
   available.rotor_command = rotor_command.has_value();
   return available;
 }

@@ -75,7 +75,9 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
   };
   if (chain.empty()) {  // the flight's own rotor entries
     at_rows(flight.rotor, &out.speed);
-    if (flight.rotor_acceleration.rows() == n) at_rows(flight.rotor_acceleration, &out.acceleration);
+    if (n >= 3)
+      for (int r = 0; r < rows; ++r)
+        out.acceleration.row(r) = FourthOrderCentralDifferenceAt(flight.rotor, flight.row_samples[r], flight.dt_s);
     return out;
   }
   if (coordinates.empty()) {  // values only: the chain in doubles, no Jet signal of every sample

@@ -126,5 +126,24 @@ TEST(FourthOrderCentralDifferenceTest, ConvergesAtFourthOrder) {
   EXPECT_GT(max_error(1.0 / 200, false), 100 * e1);
 }
 
+// The derivative at one sample, and the derivative of the derivative, are the whole series' rows to
+// the last bit, edges included, for every length the whole-series version takes.
+TEST(FourthOrderCentralDifferenceTest, AtOneSampleEqualsTheWholeSeriesBitForBit) {
+  const double dt = 1.0 / 500;
+  for (int n : {3, 4, 5, 6, 7, 9, 40}) {
+    const Eigen::MatrixX3d x = Eigen::MatrixX3d::Random(n, 3) * 7.0;
+    const Eigen::MatrixXd first = FourthOrderCentralDifference(x, dt);
+    const Eigen::MatrixXd second = FourthOrderCentralDifference(first, dt);
+    for (int k = 0; k < n; ++k) {
+      const Eigen::RowVector3d at = FourthOrderCentralDifferenceAt(x, k, dt);
+      const Eigen::RowVector3d at2 = SecondFourthOrderCentralDifferenceAt(x, k, dt);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(at[c], first(k, c)) << "n " << n << " k " << k;
+        EXPECT_EQ(at2[c], second(k, c)) << "n " << n << " k " << k;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rotorid

@@ -52,8 +52,6 @@ struct ProcessedFlight {
   Eigen::MatrixX3d specific_force;        // s, IMU (or body) frame, filtered
   Eigen::MatrixX3d angular_velocity;      // w, filtered
   Eigen::MatrixX3d angular_acceleration;  // w', derivative of the filtered w
-  Eigen::MatrixX3d specific_force_rate;   // s' and s'', derivatives of the filtered s
-  Eigen::MatrixX3d specific_force_rate2;
   Eigen::MatrixXd rotor_raw;              // rotor signal |Omega_i| on the base time, unfiltered
   Eigen::MatrixXd rotor;                  // sqrt of the filtered Omega_i^2: the rotor columns are linear in
                                           // Omega^2, so it is Omega^2 that goes through the low-pass
@@ -62,11 +60,11 @@ struct ProcessedFlight {
   SignalNoise noise;                      // of the filtered signals at the base rate
   double gravity_mps2 = kStandardGravity;
   // Inputs effects may need (EffectDescriptor::Info::inputs), on the base time, where the log has
-  // them: the rotor acceleration (derivative of the filtered rotor speed) always; the raw command
-  // next to the mapped speed; from motion capture the velocity of O_d in F_d and the heights of O_d
-  // and of each rotor above the ground (the log's `# ground_z:` metadata, else its lowest z of
-  // O_d); the voltage.
-  Eigen::MatrixXd rotor_acceleration;
+  // them: the raw command next to the mapped speed; from motion capture the velocity of O_d in F_d
+  // and the heights of O_d and of each rotor above the ground (the log's `# ground_z:` metadata,
+  // else its lowest z of O_d); the voltage. The derivatives the effects need at the row samples
+  // (the rotor acceleration, s' and s'') are taken there (FourthOrderCentralDifferenceAt), not kept
+  // for every sample: 58 MB of an hour at 200 Hz.
   std::optional<Eigen::MatrixXd> rotor_command;
   std::optional<Eigen::MatrixX3d> velocity_mps;
   std::optional<Eigen::VectorXd> height_m;

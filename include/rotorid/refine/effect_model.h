@@ -17,6 +17,7 @@
 
 #include "rotorid/ident/observation.h"
 #include "rotorid/model/effects.h"
+#include "rotorid/signal/differentiate.h"
 
 namespace rotorid {
 
@@ -47,9 +48,10 @@ ImuSample<T> LoggedImu(const ProcessedFlight& flight, int i) {
   s.angular_velocity = flight.angular_velocity.row(i).transpose().cast<T>();
   s.angular_acceleration = flight.angular_acceleration.row(i).transpose().cast<T>();
   s.specific_force = flight.specific_force.row(i).transpose().cast<T>();
-  if (i < flight.specific_force_rate2.rows()) {  // flights assembled by hand may lack them
-    s.specific_force_rate = flight.specific_force_rate.row(i).transpose().cast<T>();
-    s.specific_force_rate2 = flight.specific_force_rate2.row(i).transpose().cast<T>();
+  if (flight.specific_force.rows() >= 3) {  // s' and s'' as the whole series' differences give them there
+    s.specific_force_rate = FourthOrderCentralDifferenceAt(flight.specific_force, i, flight.dt_s).transpose().cast<T>();
+    s.specific_force_rate2 =
+        SecondFourthOrderCentralDifferenceAt(flight.specific_force, i, flight.dt_s).transpose().cast<T>();
   }
   return s;
 }
