@@ -2,8 +2,10 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <optional>
 
 #include "refine/parallel_for.h"
+#include "rotorid/core/error.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/refine/effect_model.h"
 #include "rotorid/refine/refine.h"
@@ -140,21 +142,72 @@ class RotorSignalGrid {
 
 }  // namespace
 
-std::vector<double> CriterionOverGrid(const IdentificationResult& linear, const Effects& base, EffectKind kind,
-                                      const std::vector<double>& grid, int threads) {
-  std::vector<double> criterion(grid.size(), 0.0);
-  if (kind->stage() == EffectStage::kRotorSignal) {
-    const RotorSignalGrid rotor_grid(linear, base, kind);
-    ParallelFor(static_cast<int>(grid.size()), threads,
-                [&](int i) { criterion[static_cast<size_t>(i)] = rotor_grid.Criterion(grid[static_cast<size_t>(i)]); });
+namespace {
+
+// The criterion at any values of `kind`: the rotor-signal grid's factor built once for all of them.
+class GridCriterion {
+ public:
+  GridCriterion(const IdentificationResult& linear, const Effects& base, EffectKind kind, int threads)
+      : linear_(linear), base_(base), kind_(kind), threads_(threads) {
+    if (kind->stage() == EffectStage::kRotorSignal) rotor_grid_.emplace(linear, base, kind);
+  }
+
+  std::vector<double> At(const std::vector<double>& values) const {
+    std::vector<double> criterion(values.size(), 0.0);
+    ParallelFor(static_cast<int>(values.size()), threads_, [&](int i) {
+      const double value = values[static_cast<size_t>(i)];
+      if (rotor_grid_) {
+        criterion[static_cast<size_t>(i)] = rotor_grid_->Criterion(value);
+        return;
+      }
+      Effects trial = base_;
+      trial.Set(kind_, value);
+      criterion[static_cast<size_t>(i)] = EffectCriterion(linear_, trial);
+    });
     return criterion;
   }
-  ParallelFor(static_cast<int>(grid.size()), threads, [&](int i) {
-    Effects trial = base;
-    trial.Set(kind, grid[static_cast<size_t>(i)]);
-    criterion[static_cast<size_t>(i)] = EffectCriterion(linear, trial);
-  });
-  return criterion;
+
+ private:
+  const IdentificationResult& linear_;
+  const Effects& base_;
+  EffectKind kind_;
+  int threads_;
+  std::optional<RotorSignalGrid> rotor_grid_;
+};
+
+}  // namespace
+
+std::vector<double> CriterionOverGrid(const IdentificationResult& linear, const Effects& base, EffectKind kind,
+                                      const std::vector<double>& grid, int threads) {
+  return GridCriterion(linear, base, kind, threads).At(grid);
+}
+
+double CoarseToFineGridMinimum(const IdentificationResult& linear, const Effects& base, EffectKind kind,
+                               const std::vector<double>& grid, int threads) {
+  constexpr size_t kStride = 3;
+  if (grid.empty()) throw Error("internal: empty search grid");
+  const GridCriterion criterion_at(linear, base, kind, threads);
+  std::vector<size_t> indices;
+  for (size_t k = 0; k < grid.size(); k += kStride) indices.push_back(k);
+  if (indices.back() + 1 != grid.size()) indices.push_back(grid.size() - 1);
+  const auto values_at = [&grid](const std::vector<size_t>& at) {
+    std::vector<double> values;
+    for (size_t k : at) values.push_back(grid[k]);
+    return values;
+  };
+  std::vector<double> criterion = criterion_at.At(values_at(indices));
+  const size_t coarse_best = indices[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
+  std::vector<size_t> around;
+  for (size_t k = coarse_best >= kStride - 1 ? coarse_best - (kStride - 1) : 0;
+       k <= std::min(grid.size() - 1, coarse_best + kStride - 1); ++k)
+    if (std::find(indices.begin(), indices.end(), k) == indices.end()) around.push_back(k);
+  const std::vector<double> around_criterion = criterion_at.At(values_at(around));
+  indices.insert(indices.end(), around.begin(), around.end());
+  criterion.insert(criterion.end(), around_criterion.begin(), around_criterion.end());
+  size_t best = 0;
+  for (size_t j = 1; j < indices.size(); ++j)
+    if (criterion[j] < criterion[best] || (criterion[j] == criterion[best] && indices[j] < indices[best])) best = j;
+  return grid[indices[best]];
 }
 
 }  // namespace rotorid::internal

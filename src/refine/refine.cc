@@ -762,10 +762,9 @@ std::vector<EffectKind> EffectsOnBound(const RefineResult& result, const RefineO
 
 double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind) {
   const std::vector<double> grid = options.delay_search.Grid();
-  const std::vector<double> criterion =
-      internal::CriterionOverGrid(linear, options.initial, kind, grid, options.num_threads);
-  const double best = grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
-  LOG(INFO) << "coarse search of " << kind->parameter_name() << " over " << grid.size() << " values: " << best;
+  const double best = internal::CoarseToFineGridMinimum(linear, options.initial, kind, grid, options.num_threads);
+  LOG(INFO) << "coarse-to-fine search of " << kind->parameter_name() << " on a grid of " << grid.size()
+            << " values: " << best;
   return best;
 }
 
