@@ -4,9 +4,11 @@
 #include <ceres/gradient_checker.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "refine/grid_search.h"
 #include "refine/idim_residual.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
@@ -248,6 +250,26 @@ TEST(RefineTest, ACoordinatePushedAgainstItsBoundIsHeldThereAndTheRestConverges)
   const EffectKind bias = ParseEffectKind("acc_bias");
   for (int a = 0; a < 2; ++a)
     EXPECT_NEAR(from_zero.effects.Get(bias)[a], from_bound.effects.Get(bias)[a], 1e-3 * from_zero.effects_std.Get(bias)[a]);
+}
+
+// The coarse delay search looks at every third grid value and their best one's neighbours: on flights
+// whose delay lies between, at and beyond those values, and when the minimum is the grid's edge, it
+// returns the whole grid's minimum.
+TEST(RefineTest, CoarseToFineDelaySearchFindsTheWholeGridsMinimum) {
+  const EffectKind delay = ParseEffectKind("delay");
+  for (double truth : {0.0, 0.009, 0.026, 0.046}) {
+    Effects injected;
+    injected.Set("delay_s", truth);
+    const IdentificationResult linear = IdentifySimulated("B", 20.0, 7, injected);
+    RefineOptions options;
+    for (const DelaySearch& search : {DelaySearch{}, DelaySearch{0.03, 0.2, 0.004}}) {
+      options.delay_search = search;
+      const std::vector<double> grid = search.Grid();
+      const std::vector<double> criterion = internal::CriterionOverGrid(linear, Effects{}, delay, grid, 1);
+      const double whole = grid[std::min_element(criterion.begin(), criterion.end()) - criterion.begin()];
+      EXPECT_EQ(CoarseDelaySearch(linear, options, delay), whole) << truth << " from " << search.min_s;
+    }
+  }
 }
 
 struct RecoveryCase {
