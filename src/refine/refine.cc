@@ -568,8 +568,9 @@ void SolveEffectProblem(const RefineOptions& options, EffectProblem* ep, RefineR
   bounds.Apply(false);
   result->solver.iterations = iterations;
   result->solver.final_cost = summary.final_cost;
-  result->solver.termination =
-      summary.termination_type == ceres::USER_SUCCESS ? "no convergence (iteration limit)" : TerminationName(summary.termination_type);
+  result->solver.termination = summary.termination_type == ceres::USER_SUCCESS
+                                   ? "no convergence (iteration limit)"
+                                   : TerminationName(summary.termination_type);
   result->solver.message = summary.message;
   result->solver.full_report = summary.FullReport();
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);

@@ -54,7 +54,8 @@ TEST_P(IdimResidualBlockTest, PassesGradientChecker) {
   blocks.free = AllEffects();
   // The anchored criterion divides the moment rows by the rotor-signal effects' gain on the rotor
   // moment (not 1 at this point: the lag is 3 % of its range).
-  internal::RotorMomentAnchor anchor = internal::AnchorRotorMoments(flight, Effects{}, linear.system, 0, linear.solution.chi);
+  internal::RotorMomentAnchor anchor =
+      internal::AnchorRotorMoments(flight, Effects{}, linear.system, 0, linear.solution.chi);
   anchor.share = {0, 0, 0, 0.9, 0.5, 0.7};  // a generic mix of scaled and unscaled residual
   internal::RotorSignalCache cache(&flight, &blocks, GetParam() == "anchored" ? &anchor : nullptr);
   internal::CriterionContext context;
@@ -249,7 +250,8 @@ TEST(RefineTest, ACoordinatePushedAgainstItsBoundIsHeldThereAndTheRestConverges)
   }
   const EffectKind bias = ParseEffectKind("acc_bias");
   for (int a = 0; a < 2; ++a)
-    EXPECT_NEAR(from_zero.effects.Get(bias)[a], from_bound.effects.Get(bias)[a], 1e-3 * from_zero.effects_std.Get(bias)[a]);
+    EXPECT_NEAR(from_zero.effects.Get(bias)[a], from_bound.effects.Get(bias)[a],
+                1e-3 * from_zero.effects_std.Get(bias)[a]);
 }
 
 // The coarse delay search looks at every third grid value and their best one's neighbours: on flights

@@ -19,7 +19,8 @@ namespace internal {
 // operations in the same order as the whole-series version (which requires n >= 3).
 template <typename Row, typename RowOf>
 Row FourthOrderCentralDifferenceRow(const RowOf& row, Eigen::Index n, Eigen::Index k, double dt) {
-  if (n >= 5 && k >= 2 && k <= n - 3) return (row(k - 2) - 8.0 * row(k - 1) + 8.0 * row(k + 1) - row(k + 2)) / (12.0 * dt);
+  if (n >= 5 && k >= 2 && k <= n - 3)
+    return (row(k - 2) - 8.0 * row(k - 1) + 8.0 * row(k + 1) - row(k + 2)) / (12.0 * dt);
   const double inv_2dt = 0.5 / dt;
   if (k == 0) return (-3.0 * row(0) + 4.0 * row(1) - row(2)) * inv_2dt;
   if (k == n - 1) return (3.0 * row(n - 1) - 4.0 * row(n - 2) + row(n - 3)) * inv_2dt;
@@ -32,10 +33,10 @@ Row FourthOrderCentralDifferenceRow(const RowOf& row, Eigen::Index n, Eigen::Ind
 // only (the IDIM's row samples), without a whole-flight series of each.
 template <typename Derived>
 Eigen::Matrix<double, 1, Derived::ColsAtCompileTime> FourthOrderCentralDifferenceAt(const Eigen::MatrixBase<Derived>& x,
-                                                                                   Eigen::Index k, double dt) {
+                                                                                    Eigen::Index k, double dt) {
   using Row = Eigen::Matrix<double, 1, Derived::ColsAtCompileTime>;
-  return internal::FourthOrderCentralDifferenceRow<Row>([&x](Eigen::Index j) -> Row { return x.row(j); }, x.rows(),
-                                                        k, dt);
+  return internal::FourthOrderCentralDifferenceRow<Row>([&x](Eigen::Index j) -> Row { return x.row(j); }, x.rows(), k,
+                                                        dt);
 }
 template <typename Derived>
 Eigen::Matrix<double, 1, Derived::ColsAtCompileTime> SecondFourthOrderCentralDifferenceAt(
