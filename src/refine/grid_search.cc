@@ -140,10 +140,6 @@ class RotorSignalGrid {
   Eigen::MatrixXd fixed_r_, reflectors_, block_factor_;  // R_B, V, T
 };
 
-}  // namespace
-
-namespace {
-
 // The criterion at any values of `kind`: the rotor-signal grid's factor built once for all of them.
 class GridCriterion {
  public:
