@@ -241,6 +241,7 @@ FlightInputs ProcessedFlight::inputs() const {
   available.rotor_radius = vehicle.rotor_radius_m.has_value();
   available.voltage = voltage_v.has_value();
   available.rotor_acceleration = rotor.rows() >= 3;  // differentiable at every row sample
+  available.specific_force_rates = specific_force.rows() >= 3;
   available.rotor_command = rotor_command.has_value();
   return available;
 }

@@ -35,6 +35,7 @@ const EffectDescriptor& AccDelayEffect() {
     i.meaning = "acc_log(t) = s(t - acc_delay_s): the accelerometer lags the gyro";
     i.stage = EffectStage::kImuSensor;
     i.chain_position = 3;
+    i.inputs = {FlightInput::kSpecificForceRates};
     i.dimension = 1;
     // Either stream may be the later one; beyond 50 ms no flight controller's filters reach.
     i.lower_bound = -0.05;

@@ -37,6 +37,8 @@ bool FlightInputs::Has(FlightInput input) const {
       return voltage;
     case FlightInput::kRotorAcceleration:
       return rotor_acceleration;
+    case FlightInput::kSpecificForceRates:
+      return specific_force_rates;
     case FlightInput::kRotorCommand:
       return rotor_command;
     case FlightInput::kRotorRadius:
@@ -55,6 +57,8 @@ const char* FlightInputName(FlightInput input) {
       return "the battery voltage";
     case FlightInput::kRotorAcceleration:
       return "the rotor acceleration";
+    case FlightInput::kSpecificForceRates:
+      return "the accelerometer's derivatives";
     case FlightInput::kRotorCommand:
       return "the raw motor command (a command log with a command-to-speed map)";
     case FlightInput::kRotorRadius:

@@ -44,6 +44,14 @@ Eigen::MatrixXd TransformRotors(const ProcessedFlight& flight, const std::vector
   return out;
 }
 
+// lowpass(y^2) of the rotor signal y after the chain, every sample (values only): the square
+// the rotor entries are the root of.
+Eigen::MatrixXd FilteredSquareAfterChain(const ProcessedFlight& flight, const EffectChain& acting) {
+  Eigen::MatrixXd square = TransformRotors(flight, acting.kinds, acting.Parameters());
+  square = square.array().square();  // in place: one whole-flight matrix less (23 MB on a 1 h log)
+  return FiltFiltColumns(flight.filter, square);
+}
+
 }  // namespace
 
 Eigen::MatrixXd RotorSignalWithEffects(const ProcessedFlight& flight, const Effects& effects) {
@@ -81,8 +89,7 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
     return out;
   }
   if (coordinates.empty()) {  // values only: the chain in doubles, no Jet signal of every sample
-    const Eigen::MatrixXd speed = FilteredRotorSpeed(
-        flight.filter, TransformRotors(flight, chain, acting.Parameters()).array().square().matrix());
+    const Eigen::MatrixXd speed = SpeedFromFilteredSquare(FilteredSquareAfterChain(flight, acting));
     at_rows(speed, &out.speed);
     at_rows(FourthOrderCentralDifference(speed, flight.dt_s), &out.acceleration);
     return out;
@@ -145,9 +152,7 @@ Eigen::MatrixXd EffectiveRotorSpeedAtRows(const ProcessedFlight& flight, const E
     return speed;
   }
   // As EffectiveRotorAtRows, with the square root taken at the row samples only.
-  Eigen::MatrixXd square = TransformRotors(flight, acting.kinds, acting.Parameters());
-  square = square.array().square();
-  const Eigen::MatrixXd filtered_square = FiltFiltColumns(flight.filter, square);
+  const Eigen::MatrixXd filtered_square = FilteredSquareAfterChain(flight, acting);
   for (int r = 0; r < rows; ++r) speed.row(r) = filtered_square.row(flight.row_samples[r]);
   return SpeedFromFilteredSquare(speed);
 }

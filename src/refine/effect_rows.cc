@@ -44,6 +44,10 @@ EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, co
       out->free_index.push_back(it == free.end() ? -1 : static_cast<int>(it - free.begin()));
     }
   }
+  for (EffectKind kind : imu_.chain.kinds) {
+    const std::vector<FlightInput>& inputs = kind->info().inputs;
+    imu_rates_ = imu_rates_ || std::find(inputs.begin(), inputs.end(), FlightInput::kSpecificForceRates) != inputs.end();
+  }
   // EffectiveRotorAtRows lists the rotor-signal derivatives in chain order (the battery, first in
   // the chain, is last in the registry): each free rotor-signal effect's first one.
   std::vector<int> rotor_offset(free.size(), -1);
@@ -87,7 +91,7 @@ Eigen::Matrix<T, 6, kNumIdimColumns> EffectRows::Rows(int row_sample, const Pass
           omega_rate[k].v[c - first] = rotor_->acceleration_derivative[d](row_sample, k);
         }
   const int i = flight_->row_samples[row_sample];
-  ImuSample<T> imu = LoggedImu<T>(*flight_, i);
+  ImuSample<T> imu = LoggedImu<T>(*flight_, i, imu_rates_);
   CorrectImu<T>(imu_.chain.kinds, pass.imu_pointers, &imu);
   Eigen::Matrix<T, 6, kNumIdimColumns> rows =
       IdimRows<T>(imu.angular_velocity, imu.angular_acceleration, imu.specific_force, omega, flight_->vehicle);

@@ -60,6 +60,7 @@ class EffectRows {
     std::vector<int> free_index;
   };
   Stage imu_, wrench_;
+  bool imu_rates_ = false;  // an IMU effect of the chain reads s' and s''
   std::vector<Coordinate> coordinates_;
 };
 

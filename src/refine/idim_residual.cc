@@ -6,8 +6,10 @@
 #include <cmath>
 
 #include "refine/effect_rows.h"
+#include "rotorid/ident/identify.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/model/rigid_body.h"
+#include "rotorid/refine/refine.h"
 
 namespace rotorid::internal {
 
@@ -44,10 +46,7 @@ RotorMomentAnchor AnchorRotorMoments(const ProcessedFlight& flight, const Effect
   const int samples = flight.num_rows_samples();
   Eigen::VectorXd chi_t(chi.size() + 1);
   chi_t << chi, 1.0;
-  Eigen::Matrix<double, kNumIdimColumns, 1> flight_chi;  // chi_t in the columns of the flight's own rows
-  flight_chi << chi[0], chi[1], Eigen::Matrix<double, kNumBodyParameters, 1>::Zero(), 1.0;
-  for (int k = 0; k < kNumBodyParameters; ++k)
-    flight_chi[kNumRotorCoefficients + k] = chi[system.flight_body_columns[static_cast<size_t>(index)][k]];
+  const Eigen::VectorXd flight_chi = FlightChiT(flight, NamedParameters(system, chi));  // in the flight's columns
   const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, {});
   const EffectRows rows(&flight, effects, {}, &rotor);
   const EffectRows::PassValues<double> pass = rows.Pass<double>();

@@ -49,7 +49,7 @@ bool RefineOptions::Enabled(EffectKind kind) const {
   return std::find(effects.begin(), effects.end(), kind) != effects.end();
 }
 
-std::map<std::string, double> NamedParameters(const IdimSystem& system, const Eigen::VectorXd& chi) {
+std::map<std::string, double> NamedParameters(const IdimLayout& system, const Eigen::VectorXd& chi) {
   std::map<std::string, double> values;
   for (int k = 0; k < system.num_parameters(); ++k) values[system.parameter_names[k]] = chi[k];
   return values;

@@ -53,13 +53,14 @@ enum class FlightInput {
   kHeight,             // height above ground
   kVoltage,            // battery voltage
   kRotorAcceleration,  // Omega_i'
+  kSpecificForceRates, // s' and s'', the accelerometer's derivatives
   kRotorCommand,       // the raw command next to the speed mapped from it
   kRotorRadius,        // the vehicle file's rotor_radius
 };
 // Which of them a processed flight carries.
 struct FlightInputs {
-  bool velocity = false, height = false, voltage = false, rotor_acceleration = false, rotor_command = false,
-       rotor_radius = false;
+  bool velocity = false, height = false, voltage = false, rotor_acceleration = false, specific_force_rates = false,
+       rotor_command = false, rotor_radius = false;
   bool Has(FlightInput input) const;
 };
 const char* FlightInputName(FlightInput input);

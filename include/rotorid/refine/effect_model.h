@@ -41,14 +41,16 @@ EffectiveRotor EffectiveRotorAtRows(const ProcessedFlight& flight, const Effects
 // grid's rotor columns, evaluated at every grid value).
 Eigen::MatrixXd EffectiveRotorSpeedAtRows(const ProcessedFlight& flight, const Effects& effects);
 
-// The IMU signals of sample i of a flight, as the log has them (filtered).
+// The IMU signals of sample i of a flight, as the log has them (filtered); s' and s'' only when
+// `with_rates` (an effect of the chain needs them, FlightInput::kSpecificForceRates: they are
+// taken there from nine samples of s, and every row evaluation would pay for them).
 template <typename T>
-ImuSample<T> LoggedImu(const ProcessedFlight& flight, int i) {
+ImuSample<T> LoggedImu(const ProcessedFlight& flight, int i, bool with_rates) {
   ImuSample<T> s;
   s.angular_velocity = flight.angular_velocity.row(i).transpose().cast<T>();
   s.angular_acceleration = flight.angular_acceleration.row(i).transpose().cast<T>();
   s.specific_force = flight.specific_force.row(i).transpose().cast<T>();
-  if (flight.specific_force.rows() >= 3) {  // s' and s'' as the whole series' differences give them there
+  if (with_rates && flight.specific_force.rows() >= 3) {  // as the whole series' differences give them there
     s.specific_force_rate = FourthOrderCentralDifferenceAt(flight.specific_force, i, flight.dt_s).transpose().cast<T>();
     s.specific_force_rate2 =
         SecondFourthOrderCentralDifferenceAt(flight.specific_force, i, flight.dt_s).transpose().cast<T>();

@@ -113,7 +113,8 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
                     const StepProgress& progress = {});
 
 // The coarse global search Refine starts a grid-searched effect from (options.delay_search_*, the
-// other effects at options.initial): the grid value with the smallest TLS criterion.
+// other effects at options.initial): the grid value with the smallest TLS criterion, searched coarse
+// to fine (internal::CoarseToFineGridMinimum: every third grid value, then the best one's neighbours).
 double CoarseDelaySearch(const IdentificationResult& linear, const RefineOptions& options, EffectKind kind);
 
 // Table III of several flights with named parameters and effects applied.
@@ -122,7 +123,7 @@ std::vector<std::optional<double>> RelativeErrorWithEffects(const std::vector<Pr
                                                             const Effects& effects);
 
 // Named parameter values of a solution.
-std::map<std::string, double> NamedParameters(const IdimSystem& system, const Eigen::VectorXd& chi);
+std::map<std::string, double> NamedParameters(const IdimLayout& system, const Eigen::VectorXd& chi);
 
 // The TLS criterion (mean squared whitened residual, minimised over the essential parameters with
 // the linear solution's weights and metric) of the flights with these effects applied.
