@@ -46,7 +46,8 @@ EffectRows::EffectRows(const ProcessedFlight* flight, const Effects& effects, co
   }
   for (EffectKind kind : imu_.chain.kinds) {
     const std::vector<FlightInput>& inputs = kind->info().inputs;
-    imu_rates_ = imu_rates_ || std::find(inputs.begin(), inputs.end(), FlightInput::kSpecificForceRates) != inputs.end();
+    imu_rates_ =
+        imu_rates_ || std::find(inputs.begin(), inputs.end(), FlightInput::kSpecificForceRates) != inputs.end();
   }
   // EffectiveRotorAtRows lists the rotor-signal derivatives in chain order (the battery, first in
   // the chain, is last in the registry): each free rotor-signal effect's first one.

@@ -49,13 +49,13 @@ enum class EffectStage {
 
 // Flight signals an effect's model may need beyond gyro, accelerometer and rotor signal.
 enum class FlightInput {
-  kVelocity,           // velocity of O_d in F_d (motion capture, differentiated, or velocity columns)
-  kHeight,             // height above ground
-  kVoltage,            // battery voltage
-  kRotorAcceleration,  // Omega_i'
-  kSpecificForceRates, // s' and s'', the accelerometer's derivatives
-  kRotorCommand,       // the raw command next to the speed mapped from it
-  kRotorRadius,        // the vehicle file's rotor_radius
+  kVelocity,            // velocity of O_d in F_d (motion capture, differentiated, or velocity columns)
+  kHeight,              // height above ground
+  kVoltage,             // battery voltage
+  kRotorAcceleration,   // Omega_i'
+  kSpecificForceRates,  // s' and s'', the accelerometer's derivatives
+  kRotorCommand,        // the raw command next to the speed mapped from it
+  kRotorRadius,         // the vehicle file's rotor_radius
 };
 // Which of them a processed flight carries.
 struct FlightInputs {
