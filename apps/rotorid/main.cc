@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "commands.h"
+#include "heap.h"
 #include "rotorid/core/error.h"
 
 namespace {
@@ -18,6 +19,7 @@ int UsageFailure(const std::string& message, const std::string& hint) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  rotorid::cli::PrepareHeapForLargeArrays();
   google::InitGoogleLogging(argv[0]);
   FLAGS_logtostderr = true;
   // Library (Ceres, glog) lines reach the console only under --verbose.
