@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs everything rotorid needs to build, test and plot on a fresh Debian 12 machine (run as root).
+# gfortran brings libgfortran.a, which the static link of LAPACK needs (cmake/RotoridStaticDependencies.cmake).
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 SUDO=""
@@ -10,4 +11,5 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libeigen3-dev libceres-dev libgoogle-glog-dev libgflags-dev \
   libgtest-dev libgmock-dev libbenchmark-dev \
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libfast-float-dev \
+  gfortran \
   gnuplot-nox
