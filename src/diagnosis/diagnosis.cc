@@ -5,13 +5,13 @@
 #include <mutex>
 #include <optional>
 
+#include "core/parallel_for.h"
 #include "diagnosis/confounding.h"
 #include "diagnosis/held_out.h"
 #include "diagnosis/linearization.h"
 #include "diagnosis/selection.h"
 #include "diagnosis/verdict_text.h"
 #include "diagnosis/verdicts.h"
-#include "refine/parallel_for.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/refine/refine.h"

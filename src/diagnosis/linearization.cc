@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/parallel_for.h"
 #include "diagnosis/statistics.h"
 #include "refine/effect_rows.h"
 #include "rotorid/core/error.h"
@@ -82,7 +83,7 @@ std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle) {
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
                                      const std::vector<std::string>& free_parameters, const Effects& given,
-                                     const std::vector<EffectKind>& kinds, int max_row_samples) {
+                                     const std::vector<EffectKind>& kinds, int max_row_samples, int num_threads) {
   // The rows' Jets take a value of every free effect: per-rotor ones absent from `given` at zero.
   Effects effects = given;
   for (EffectKind kind : kinds) effects.Set(kind, given.Get(kind, flights.front().vehicle));
@@ -173,21 +174,30 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
     const double arm = flight.vehicle.MeanArm() > 0.0 ? flight.vehicle.MeanArm() : 1.0;
     const EffectRows model(&flight, effects, kinds, &rotor);
     const size_t coordinates = model.coordinates().size();
-    for (Eigen::Index k = 0; k < kept; ++k)
-      for (size_t first = 0; first < coordinates; first += kWideImuJetSize) {
-        const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows =
-            model.Rows<WideImuJet>(static_cast<int>(stride * k), first);
+    std::vector<EffectRows::PassValues<WideImuJet>> passes;
+    for (size_t first = 0; first < coordinates; first += kWideImuJetSize)
+      passes.push_back(model.Pass<WideImuJet>(first));
+    // The Jets of the kept row samples, in parallel: each writes its own rows, unscaled.
+    ParallelFor(static_cast<int>(kept), num_threads, [&](int k) {
+      for (const EffectRows::PassValues<WideImuJet>& jet_pass : passes) {
+        const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows = model.Rows<WideImuJet>(stride * k, jet_pass);
         for (int j = 0; j < kNumWrenchComponents; ++j) {
           WideImuJet rho_jet(0.0);
           for (int c = 0; c < kNumIdimColumns; ++c) rho_jet += jet_rows(j, c) * chi_t[c];
-          for (size_t c = first; c < std::min(coordinates, first + kWideImuJetSize); ++c) {
-            const auto column = static_cast<Eigen::Index>(c);
-            out.effect_jacobian(offset + kNumWrenchComponents * k + j, column) = rho_jet.v[c - first] / scale[j];
-            const double signature = std::pow(rho_jet.v[c - first] * (j < 3 ? arm : 1.0), 2);
-            (scored[static_cast<size_t>(j)] ? signature_scored : signature_unscored)[column] += signature;
-          }
+          for (size_t c = jet_pass.first; c < jet_pass.last; ++c)
+            out.effect_jacobian(offset + kNumWrenchComponents * k + j, static_cast<Eigen::Index>(c)) =
+                rho_jet.v[c - jet_pass.first];
         }
       }
+    });
+    for (Eigen::Index k = 0; k < kept; ++k)
+      for (int j = 0; j < kNumWrenchComponents; ++j)
+        for (Eigen::Index column = 0; column < e; ++column) {
+          double& derivative = out.effect_jacobian(offset + kNumWrenchComponents * k + j, column);
+          const double signature = std::pow(derivative * (j < 3 ? arm : 1.0), 2);
+          (scored[static_cast<size_t>(j)] ? signature_scored : signature_unscored)[column] += signature;
+          derivative /= scale[j];
+        }
     offset += kNumWrenchComponents * kept;
   }
   out.effect_unscored_share =

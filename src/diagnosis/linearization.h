@@ -70,11 +70,13 @@ struct EffectLinearization {
 // flight only, stride = ceil(all / max_row_samples), and the normal equations are scaled by all / kept
 // samples to stand for every row; the scales, scored_rows and the autocorrelation factor still come
 // from the residual of every row sample. The Jets cost about 13 times the rows' values, so this bounds
-// the cost and memory of a long log's linearisation.
+// the cost and memory of a long log's linearisation. The Jets run on `num_threads` threads; the result
+// is the same for any number.
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
                                      const std::vector<std::string>& free_parameters, const Effects& effects,
-                                     const std::vector<EffectKind>& kinds, int max_row_samples = 0);
+                                     const std::vector<EffectKind>& kinds, int max_row_samples = 0,
+                                     int num_threads = 1);
 
 // Weighted least squares of the scaled residual on chi and the effect columns of `subset`.
 struct EffectSubsetFit {

@@ -6,7 +6,7 @@
 #include <mutex>
 #include <thread>
 
-#include "refine/parallel_for.h"
+#include "core/parallel_for.h"
 #include "rotorid/core/error.h"
 
 namespace rotorid {

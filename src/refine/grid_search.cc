@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <optional>
 
-#include "refine/parallel_for.h"
+#include "core/parallel_for.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/refine/effect_model.h"

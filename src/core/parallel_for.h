@@ -1,6 +1,6 @@
 #pragma once
 
-// Internal: the one thread pool of the refinement and the diagnosis.
+// Internal: the one thread pool of the library (the refinement, the diagnosis, reading text logs).
 
 #include <functional>
 
