@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <exception>
 #include <map>
 #include <optional>
 #include <string_view>
 #include <vector>
 
+#include "core/parallel_for.h"
 #include "io/csv_text.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/atomic_file.h"
@@ -50,6 +52,14 @@ bool IsKnownColumn(const std::string& name) {
   return name.size() > 6 && name.compare(0, 6, "rotor_") == 0 &&
          name.find_first_not_of("0123456789", 6) == std::string::npos;
 }
+
+// The rows of a stretch of the file: the values of every column rotorid reads, and the metadata
+// of the comments among them.
+struct TableRows {
+  std::vector<std::vector<double>> data;  // per cell; empty for ignored columns
+  std::vector<int> row_lines;             // file line of each data row
+  std::map<std::string, std::string> metadata;
+};
 
 // The file as read: metadata, header, and the values of every column rotorid reads.
 struct FlightTable {
@@ -106,58 +116,117 @@ void ReadHeader(const internal::TextLine& line, FlightTable* table) {
 
 // Only the columns rotorid reads must hold numbers. The cells are taken off the line one by one
 // (no list of cells per row: a 1 h log has 720k rows).
-void ReadRow(const internal::TextLine& line, FlightTable* table) {
+void ReadRow(const internal::TextLine& line, const FlightTable& table, TableRows* rows) {
   const size_t cells = static_cast<size_t>(std::count(line.text.begin(), line.text.end(), ',')) + 1;
-  if (cells != table->names.size()) {
-    throw Error(Located(table->source, line.number, 0,
+  if (cells != table.names.size()) {
+    throw Error(Located(table.source, line.number, 0,
                         "row has " + std::to_string(cells) + " cells, the header has " +
-                            std::to_string(table->names.size()) + " (truncated or malformed row)"));
+                            std::to_string(table.names.size()) + " (truncated or malformed row)"));
   }
   std::string_view rest = line.text;
   for (size_t k = 0; k < cells; ++k) {
     const size_t comma = rest.find(',');
     const std::string_view cell = TrimSpaces(rest.substr(0, comma));
     rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma + 1);
-    if (!table->known[k]) continue;
+    if (!table.known[k]) continue;
     const std::optional<double> value = internal::ParseNumber(cell);
     if (!value) {
-      throw Error(Located(table->source, line.number, CellColumn(line.text, k),
-                          "column '" + table->names[k] + "' is not a number: '" + std::string(cell) + "'"));
+      throw Error(Located(table.source, line.number, CellColumn(line.text, k),
+                          "column '" + table.names[k] + "' is not a number: '" + std::string(cell) + "'"));
     }
     if (!std::isfinite(*value)) {
-      throw Error(Located(table->source, line.number, CellColumn(line.text, k),
-                          "column '" + table->names[k] + "' holds '" + std::string(cell) + "', not a finite number"));
+      throw Error(Located(table.source, line.number, CellColumn(line.text, k),
+                          "column '" + table.names[k] + "' holds '" + std::string(cell) + "', not a finite number"));
     }
-    table->data[k].push_back(*value);
+    rows->data[k].push_back(*value);
   }
-  table->row_lines.push_back(line.number);
+  rows->row_lines.push_back(line.number);
 }
 
-// Blank lines are skipped; '#' lines are comments wherever they stand; the first other line is
-// the header.
+// The rows of `text`, whose line before the first is `line_number`. Blank lines are skipped; '#'
+// lines are comments wherever they stand.
+TableRows ReadRows(std::string_view text, int line_number, const FlightTable& table) {
+  TableRows rows;
+  // At most one row per line: no reallocation while the columns fill.
+  const size_t lines = static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
+  rows.data.resize(table.names.size());
+  rows.row_lines.reserve(lines);
+  for (size_t k = 0; k < rows.data.size(); ++k)
+    if (table.known[k]) rows.data[k].reserve(lines);
+  internal::TextLine line;
+  while (internal::NextLine(&text, &line_number, &line)) {
+    const std::string_view trimmed = TrimSpaces(line.text);
+    if (trimmed.empty()) continue;
+    if (trimmed.front() == '#')
+      ReadCommentLine(trimmed, &rows.metadata);
+    else
+      ReadRow(line, table, &rows);
+  }
+  return rows;
+}
+
+// A log's rows are parsed in this many stretches at once, split at line ends; below
+// kParallelParseBytes in one (a thread costs more than it saves there).
+constexpr int kParseThreads = 2;
+constexpr size_t kParallelParseBytes = size_t{1} << 20;
+
+// The rows after the header, `body`, whose line before the first is `line_number`. The stretches'
+// rows, comments and errors come out in file order, as if read in one pass.
+void ReadBody(std::string_view body, int line_number, FlightTable* table) {
+  std::vector<std::string_view> stretches;
+  std::vector<int> first_lines;
+  while (!body.empty()) {
+    const size_t remaining = static_cast<size_t>(kParseThreads) - stretches.size();
+    size_t end = body.size();
+    if (remaining > 1 && body.size() >= kParallelParseBytes) {
+      const size_t newline = body.find('\n', body.size() / remaining);
+      end = newline == std::string_view::npos ? body.size() : newline + 1;
+    }
+    stretches.push_back(body.substr(0, end));
+    first_lines.push_back(line_number);
+    line_number += static_cast<int>(std::count(stretches.back().begin(), stretches.back().end(), '\n'));
+    body.remove_prefix(end);
+  }
+  std::vector<TableRows> parts(stretches.size());
+  std::vector<std::exception_ptr> failures(stretches.size());
+  internal::ParallelFor(static_cast<int>(stretches.size()), kParseThreads, [&](int i) {
+    try {
+      parts[i] = ReadRows(stretches[i], first_lines[i], *table);
+    } catch (...) {
+      failures[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& failure : failures)
+    if (failure) std::rethrow_exception(failure);
+  if (parts.empty()) return;
+  table->data = std::move(parts.front().data);
+  table->row_lines = std::move(parts.front().row_lines);
+  for (size_t i = 0; i < parts.size(); ++i) {
+    for (auto& [key, value] : parts[i].metadata) table->metadata[key] = std::move(value);
+    if (i == 0) continue;
+    for (size_t k = 0; k < table->data.size(); ++k)
+      table->data[k].insert(table->data[k].end(), parts[i].data[k].begin(), parts[i].data[k].end());
+    table->row_lines.insert(table->row_lines.end(), parts[i].row_lines.begin(), parts[i].row_lines.end());
+  }
+}
+
+// Comments and blank lines may precede the header; the first other line is the header.
 FlightTable ReadTable(const std::string& text, const std::string& source) {
   FlightTable table;
   table.source = source;
   std::string_view rest(text);
   int line_number = 0;
   internal::TextLine line;
-  while (internal::NextLine(&rest, &line_number, &line)) {
+  while (!table.has_header && internal::NextLine(&rest, &line_number, &line)) {
     const std::string_view trimmed = TrimSpaces(line.text);
     if (trimmed.empty()) continue;
-    if (trimmed.front() == '#') {
+    if (trimmed.front() == '#')
       ReadCommentLine(trimmed, &table.metadata);
-    } else if (!table.has_header) {
+    else
       ReadHeader(line, &table);
-      // At most one row per remaining line: no reallocation while the columns fill.
-      const size_t lines = static_cast<size_t>(std::count(rest.begin(), rest.end(), '\n')) + 1;
-      table.row_lines.reserve(lines);
-      for (size_t k = 0; k < table.data.size(); ++k)
-        if (table.known[k]) table.data[k].reserve(lines);
-    } else {
-      ReadRow(line, &table);
-    }
   }
   if (!table.has_header) throw Error(source + ": empty file: no header line and no samples");
+  ReadBody(rest, line_number, &table);
   return table;
 }
 

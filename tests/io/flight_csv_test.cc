@@ -128,5 +128,35 @@ TEST(FlightCsv, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(ErrorOf("# gravity: 9.81 m/s^2\n" + kHeader + "\n" + Rows(20)), "no error");  // text after the number
 }
 
+// Logs of a megabyte and more are parsed in two stretches at once: the rows, the comments among
+// them and the first error must come out as from one pass (30 000 rows of 60 bytes: 1.8 MB).
+TEST(FlightCsv, ALongLogReadsAsInOnePass) {
+  const int n = 30000;
+  std::string rows;
+  for (int i = 0; i < n; ++i) {
+    if (i == 100) rows += "# vehicle: first\n";
+    if (i == 20000) rows += "\n# vehicle: second\n";  // past the middle: a later comment wins
+    rows += std::to_string(0.01 * i) + ",0.1,0.2,0.3,0,0,9.8," + std::to_string(i) + ",910,920,930\n";
+  }
+  const FlightLog log = ParseFlightCsv(kHeader + "\n" + rows, "f.csv", 4);
+  ASSERT_EQ(log.num_samples(), n);
+  for (int i = 0; i < n; ++i) ASSERT_EQ(log.rotor_radps(i, 0), i) << i;
+  EXPECT_EQ(log.metadata.at("vehicle"), "second");
+  // Data row i stands on file line 2 + i, plus the comment above row 100 and the blank line and
+  // comment above row 20000: row 25000 (in the second stretch) on line 25005.
+  auto broken = [&](int row) {
+    const std::string line =
+        std::to_string(0.01 * row) + ",0.1,0.2,0.3,0,0,9.8," + std::to_string(row) + ",910,920,930\n";
+    std::string text = kHeader + "\n" + rows;
+    text.replace(text.find(line), line.size(), std::to_string(0.01 * row) + ",0.1,x,0.3,0,0,9.8,1,910,920,930\n");
+    return text;
+  };
+  EXPECT_EQ(ErrorOf(broken(25000)), "f.csv:25005:16: column 'gyro_y' is not a number: 'x'");
+  std::string both = broken(25000);
+  const std::string row_5 = "0.050000,0.1,0.2,0.3,0,0,9.8,5,910,920,930\n";
+  both.replace(both.find(row_5), row_5.size(), "0.05,0.1\n");
+  EXPECT_EQ(ErrorOf(both), "f.csv:7: row has 2 cells, the header has 11 (truncated or malformed row)");
+}
+
 }  // namespace
 }  // namespace rotorid
