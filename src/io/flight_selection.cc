@@ -138,7 +138,7 @@ FlightInputSummary DescribeFlightInput(const FlightLog& log, const std::string& 
   return s;
 }
 
-SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const std::optional<TimeWindow>& window,
+SelectedFlight SelectFlight(FlightLog log, const std::string& path, const std::optional<TimeWindow>& window,
                             SegmentMode mode, const std::optional<SegmentationOptions>& segmentation_options) {
   SelectedFlight selected;
   FlightInputSummary& s = selected.summary;
@@ -147,9 +147,9 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
   s.segment_mode = mode == SegmentMode::kAuto ? "auto" : "none";
   s.kept.clear();
 
-  FlightLog cut = log;
+  FlightLog cut = std::move(log);
   if (window) {
-    const Eigen::VectorXd& t = log.t_s;
+    const Eigen::VectorXd& t = cut.t_s;
     const int begin = static_cast<int>(std::lower_bound(t.data(), t.data() + t.size(), window->start_s) - t.data());
     const int end = static_cast<int>(std::upper_bound(t.data(), t.data() + t.size(), window->end_s) - t.data());
     if (end - begin < 2) {
@@ -159,7 +159,7 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
     }
     if (begin > 0) s.left_out.push_back({t[0], t[begin - 1], "outside --window", ""});
     if (end < t.size()) s.left_out.push_back({t[end], t[t.size() - 1], "outside --window", ""});
-    cut = log.Slice(begin, end);
+    cut = cut.Slice(begin, end);
   }
 
   if (mode == SegmentMode::kNone) {
@@ -186,7 +186,7 @@ SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const
                 FormatValue("%.3f s", cut.t_s[cut.num_samples() - 1]) +
                 "; choose the flight with --window START,END or use --segment none");
   }
-  selected.segments = KeptSegments(cut, segments);
+  selected.segments = KeptSegments(std::move(cut), segments);
   s.used_s = 0.0;
   for (FlightLog& segment : selected.segments) {
     s.kept.push_back({segment.t_s[0], segment.t_s[segment.num_samples() - 1]});

@@ -447,8 +447,13 @@ Segmentation SegmentFlight(const FlightLog& log, const SegmentationOptions& o) {
   return result;
 }
 
-std::vector<FlightLog> KeptSegments(const FlightLog& log, const Segmentation& segmentation) {
+std::vector<FlightLog> KeptSegments(FlightLog log, const Segmentation& segmentation) {
   std::vector<FlightLog> out;
+  if (segmentation.kept.size() == 1 && segmentation.kept[0].begin == 0 &&
+      segmentation.kept[0].end == log.num_samples()) {
+    out.push_back(std::move(log));
+    return out;
+  }
   out.reserve(segmentation.kept.size());
   for (const SampleRange& r : segmentation.kept) out.push_back(log.Slice(r.begin, r.end));
   return out;

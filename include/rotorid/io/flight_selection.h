@@ -68,7 +68,7 @@ struct SelectedFlight {
 // self-launched FPV quads) SegmentThrownFlight with ThrownQuadSegmentationOptions, every other
 // format SegmentFlight with the default options. Throws rotorid::Error naming the file when the
 // window lies outside the log or nothing usable is left.
-SelectedFlight SelectFlight(const FlightLog& log, const std::string& path, const std::optional<TimeWindow>& window,
+SelectedFlight SelectFlight(FlightLog log, const std::string& path, const std::optional<TimeWindow>& window,
                             SegmentMode mode, const std::optional<SegmentationOptions>& segmentation = std::nullopt);
 
 // The summary alone, for a log used whole (e.g. the rotor signal of a log read without selection).

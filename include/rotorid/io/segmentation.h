@@ -117,7 +117,8 @@ struct Segmentation {
 // Segments a flight. Throws rotorid::Error for invalid options.
 Segmentation SegmentFlight(const FlightLog& log, const SegmentationOptions& options = {});
 
-// The kept ranges as separate logs (FlightLog::Slice), in time order.
-std::vector<FlightLog> KeptSegments(const FlightLog& log, const Segmentation& segmentation);
+// The kept ranges as separate logs (FlightLog::Slice), in time order; `log` itself, not a copy, when
+// the one kept range is all of it.
+std::vector<FlightLog> KeptSegments(FlightLog log, const Segmentation& segmentation);
 
 }  // namespace rotorid
