@@ -23,6 +23,7 @@ json Components(const ComponentVector& values) {
 
 // A scalar effect parameter as a number, a vector one as [x, y, z].
 json EffectValue(const Eigen::VectorXd& v) {
+  if (v.size() == 0) return nullptr;  // not known in SI (a scale-free selection without its scale)
   if (v.size() == 1) return v[0];
   json out = json::array();
   for (Eigen::Index k = 0; k < v.size(); ++k) out.push_back(v[k]);
@@ -51,6 +52,24 @@ json TestJson(const EffectTest& test) {
           {"p_value", test.p_value},                 {"added_parameters", test.added_parameters},
           {"effective_samples", test.effective_samples}, {"significant", test.significant},
           {"screened", test.screened}};
+}
+
+json ScaleFreeJson(const ScaleFreeTest& t) {
+  json values = json::object();
+  for (size_t k = 0; k < t.labels.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    values[t.labels[k]] = {
+        {"value", t.ratio[i]}, {"std", t.ratio_std[i]}, {"ratio", bool(t.over_rotor_coefficient[k])}};
+  }
+  return {{"component", kWrenchComponentNames[static_cast<size_t>(t.component)]},
+          {"rotor_coefficient", t.rotor_coefficient},
+          {"test", TestJson(t.test)},
+          {"relative_error_before_pct", t.relative_error_before_pct},
+          {"relative_error_after_pct", t.relative_error_after_pct},
+          {"values", values},
+          {"si_value", EffectValue(t.value)},
+          {"si_std", EffectValue(t.std)},
+          {"implausible", t.implausible}};
 }
 
 json LocationJson(const GapLocation& where) {
@@ -137,6 +156,7 @@ json DiagnosisJson(const Diagnosis& d) {
     if (const std::vector<std::string> held = v.kind->HeldLabels(static_cast<int>(v.value.size())); !held.empty())
       entry["magnitude"][name]["held"] = held;
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
+    if (v.scale_free) entry["scale_free"] = ScaleFreeJson(*v.scale_free);
     ranking.push_back(entry);
   }
   json steps = json::array();
@@ -159,7 +179,7 @@ json DiagnosisJson(const Diagnosis& d) {
                           {"distinguishable", c.distinguishable},
                           {"note", c.note}});
   json final_effects = json::object();
-  for (EffectKind kind : d.selected)
+  for (EffectKind kind : d.final_model)
     final_effects[EffectParameterName(kind)] = {{"value", EffectValue(d.final_effects.Get(kind))},
                                                 {"std", EffectValue(d.final_effects_std.Get(kind))}};
   json where = LocationJson(d.where);
