@@ -23,7 +23,6 @@ json Components(const ComponentVector& values) {
 
 // A scalar effect parameter as a number, a vector one as [x, y, z].
 json EffectValue(const Eigen::VectorXd& v) {
-  if (v.size() == 0) return nullptr;  // not known in SI (a scale-free selection without its scale)
   if (v.size() == 1) return v[0];
   json out = json::array();
   for (Eigen::Index k = 0; k < v.size(); ++k) out.push_back(v[k]);
@@ -67,8 +66,8 @@ json ScaleFreeJson(const ScaleFreeTest& t) {
           {"relative_error_before_pct", t.relative_error_before_pct},
           {"relative_error_after_pct", t.relative_error_after_pct},
           {"values", values},
-          {"si_value", EffectValue(t.value)},
-          {"si_std", EffectValue(t.std)},
+          {"si_value", t.value.size() > 0 ? EffectValue(t.value) : json(nullptr)},
+          {"si_std", t.std.size() > 0 ? EffectValue(t.std) : json(nullptr)},
           {"implausible", t.implausible}};
 }
 
@@ -157,6 +156,8 @@ json DiagnosisJson(const Diagnosis& d) {
       entry["magnitude"][name]["held"] = held;
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
     if (v.scale_free) entry["scale_free"] = ScaleFreeJson(*v.scale_free);
+    // Selected by a scale-free test whose rotor coefficient no fit fixes: no value in SI.
+    if (v.selected && v.scale_free && v.value.size() == 0) entry["magnitude"][name] = {{"value", nullptr}, {"std", nullptr}};
     ranking.push_back(entry);
   }
   json steps = json::array();

@@ -35,9 +35,12 @@ struct ScaleFreeData {
   const std::map<std::string, double>& final_parameter_std;
 };
 
-// Whether the test applies to `kind` at all: effects whose coordinates the refinement ties (a
-// zero-sum or held coordinate) would need those ties in the row fit too, which it does not carry.
-bool ScaleFreeTestable(EffectKind kind);
+// Whether the test applies to `kind`: every coordinate of it acts mostly in components nothing
+// scores (EffectLinearization::effect_unscored_share above kMostlyUnscored). The row test judges the
+// candidate as a whole, and a coordinate that acts elsewhere (rotor drag's flapping moment, in roll
+// and pitch) has no column in that row to be judged by. Effects whose coordinates the refinement
+// ties (a zero-sum or held coordinate) would need those ties in the row fit too, which it lacks.
+bool ScaleFreeTestable(EffectKind kind, const EffectLinearization& linearization);
 
 // The scale-free test of `kind` in `component` (one the linear model leaves without rotor term), on
 // top of the kept effects: the row fitted on each fold's training rows without and with the
@@ -45,8 +48,8 @@ bool ScaleFreeTestable(EffectKind kind);
 // the row's units from all identification data.
 ScaleFreeTest TestScaleFree(EffectKind kind, int component, const ScaleFreeData& data, const DiagnosisOptions& options);
 
-// Runs the scale-free test for every verdict that is not selected and whose signature lies mostly in
-// a component nothing scores (MostlyUnscoredShare), in each such component, keeping the one with the
+// Runs the scale-free test for every verdict that is not selected and ScaleFreeTestable, in each
+// component nothing scores, keeping the one with the
 // largest held-out shrink. A candidate that passes it (significant, its sign and, with an SI value,
 // its physical range plausible) is marked selected. Returns those, in the verdicts' order.
 std::vector<EffectKind> SelectInUnscoredComponents(const EffectLinearization& linearization, const ScaleFreeData& data,

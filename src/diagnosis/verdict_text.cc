@@ -53,9 +53,11 @@ std::string ScaleFreeStatement(const EffectVerdict& v) {
   std::ostringstream out;
   out << "the scale-free test of " << component << " (its row alone, every coefficient a ratio to "
       << t.rotor_coefficient << ", which the linear identification discarded) "
-      << (v.selected              ? "selects it"
-          : t.implausible.empty() ? "finds it not significant"
-                                  : "finds it implausible")
+      << (v.selected                             ? "selects it"
+          : !t.implausible.empty()               ? "finds it implausible"
+          : t.relative_error_before_pct >= 100.0 ? "cannot judge it (the row without it predicts its held-out rows no "
+                                                   "better than zero)"
+                                                 : "finds it not significant")
       << ": " << ScaleFreeValueText(t) << std::fixed << std::setprecision(1) << "; held-out " << component
       << " relative error " << t.relative_error_before_pct << " -> " << t.relative_error_after_pct << " % (shrink "
       << t.test.shrink_pct << " %, F = " << t.test.f_statistic << ", p = " << std::scientific << std::setprecision(1)

@@ -196,6 +196,7 @@ TEST(DiagnosisTest, EffectActingWhereNothingIsScoredIsFoundByTheScaleFreeTest) {
   ASSERT_EQ(t.ratio.size(), 1);
   ASSERT_EQ(t.labels, std::vector<std::string>{"rotor_inertia_kgm2 / kd"});
   const double truth = 5e-5 / sim.truth.rotor.kd;
+  RecordProperty("scale_free_note", v.note);  // --gtest_output=xml shows the numbers
   EXPECT_NEAR(t.ratio[0], truth, 0.15 * truth) << v.note;
   EXPECT_GT(t.ratio_std[0], 0.0);
   EXPECT_LT(t.ratio_std[0], 0.1 * truth);
@@ -239,6 +240,7 @@ TEST(DiagnosisTest, ScaleFreeTestSelectsNoRotorInertiaThatIsNotThere) {
   const EffectVerdict& v = VerdictOf(d, inertia);
   EXPECT_FALSE(v.selected) << DiagnosisVerdict(d);
   EXPECT_TRUE(d.selected_scale_free.empty()) << DiagnosisVerdict(d);
+  RecordProperty("rotor_inertia_note", v.note);
   ASSERT_FALSE(d.baseline.relative_error_pct[5].has_value()) << DiagnosisVerdict(d);  // Mz not scored
   ASSERT_TRUE(v.scale_free.has_value()) << v.note;                                    // so it was tested
   EXPECT_FALSE(v.scale_free->test.significant && v.scale_free->implausible.empty()) << v.note;
