@@ -157,7 +157,8 @@ json DiagnosisJson(const Diagnosis& d) {
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
     if (v.scale_free) entry["scale_free"] = ScaleFreeJson(*v.scale_free);
     // Selected by a scale-free test whose rotor coefficient no fit fixes: no value in SI.
-    if (v.selected && v.scale_free && v.value.size() == 0) entry["magnitude"][name] = {{"value", nullptr}, {"std", nullptr}};
+    if (v.selected && v.scale_free && v.value.size() == 0)
+      entry["magnitude"][name] = {{"value", nullptr}, {"std", nullptr}};
     ranking.push_back(entry);
   }
   json steps = json::array();

@@ -347,8 +347,8 @@ void ValueOnAllData(EffectKind kind, const std::vector<ComponentRows>& rows, con
       known_sq += d.col(kKnownColumn).squaredNorm();
       all_sq += d.squaredNorm();
     }
-    const bool ratio = (!layout.known_free || OwnTermInKnownColumn(kind)) && all_sq > 0.0 &&
-                       known_sq >= kMostlyKnownColumn * all_sq;
+    const bool ratio =
+        (!layout.known_free || OwnTermInKnownColumn(kind)) && all_sq > 0.0 && known_sq >= kMostlyKnownColumn * all_sq;
     out->over_rotor_coefficient.push_back(ratio);
     out->labels.push_back(labels[static_cast<size_t>(k)] + (ratio ? " / " + coefficient : ""));
   }
