@@ -20,13 +20,13 @@ constexpr int kKnownColumn = kNumIdimColumns - 1;
 // A rotor coefficient whose relative std in the final fit is below this fixes an SI value.
 constexpr double kKnownCoefficientRelativeStd = 0.1;
 // A candidate's coordinate whose column in the row comes at least this much (in squared norm) from
-// the known column, whose coefficient the ratio fit does not estimate, is a ratio to the rotor
+// the known column, a term that does not scale with the rotor coefficient, is a ratio to that
 // coefficient (a torque J sum(+-Omega') beside kd sum(+-Omega^2)).
 constexpr double kMostlyKnownColumn = 0.5;
 
 // A row whose fit without the candidate leaves a held-out relative error of this or more predicts
 // its held-out rows no better than zero: a test on top of it judges nothing (jana01 and jana04 by
-// RPM: 156-172 %), and it selects nothing there.
+// RPM: 159 and 156 %), and it selects nothing there.
 constexpr double kUnpredictedRowPct = 100.0;
 
 // The rotor coefficient of a component: kd carries the yaw moment, kt the others.
