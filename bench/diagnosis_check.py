@@ -36,6 +36,24 @@ def withheld_effects(truth, ranking):
             if any(v != 0 for v in as_list(value))}
 
 
+def judge_scale_free(key, scale_free, truth, withheld):
+    """(within tolerance, text) of a scale-free selection: each value `<key> / <coefficient>` against
+    the truth's value over the truth's coefficient, with the parameter's own tolerance."""
+    coefficient = scale_free["rotor_coefficient"]
+    parts, ok = [], True
+    for label, m in scale_free["values"].items():
+        want = truth_of(truth, key)
+        if m.get("ratio"):
+            want = want / truth["parameters"][coefficient]
+        if not withheld:
+            parts.append(f"{label} {m['value']:.4g} (false)")
+            continue
+        good, text = judge_effect(key, m["value"], m["std"], want)
+        ok = ok and good
+        parts += [t.replace(key, label, 1) for t in text]
+    return ok, parts
+
+
 def main():
     label, d, t, seconds = read_arguments()
     if d is None:
@@ -50,7 +68,13 @@ def main():
         if entry["effect"] not in selected:
             continue
         for key, m in entry["magnitude"].items():
-            if entry["effect"] in withheld:
+            if m["value"] is None and "scale_free" in entry:
+                # Selected by the scale-free test of a component without rotor term: its size is a
+                # ratio to that rotor coefficient (J / kd), judged against the truth's ratio.
+                good, text = judge_scale_free(key, entry["scale_free"], t, entry["effect"] in withheld)
+                magnitudes_ok = magnitudes_ok and good
+                parts += text
+            elif entry["effect"] in withheld:
                 good, text = judge_effect(key, m["value"], m["std"], truth_of(t, key), m.get("held"))
                 magnitudes_ok = magnitudes_ok and good
                 parts += text

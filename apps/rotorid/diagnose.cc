@@ -106,7 +106,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
     input.flights = ReportFlights(flights, /*held_out=*/false);
     for (const ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) input.flights.push_back(f);
     input.parameter_sets = {{"linear", result.linear_parameters, Effects()}};
-    if (!result.selected.empty())
+    if (!result.final_model.empty())
       input.parameter_sets.push_back({"with selected effects", result.final_parameters, result.final_effects});
     const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {

@@ -9,6 +9,7 @@
 #include "diagnosis/confounding.h"
 #include "diagnosis/held_out.h"
 #include "diagnosis/linearization.h"
+#include "diagnosis/scale_free.h"
 #include "diagnosis/selection.h"
 #include "diagnosis/verdict_text.h"
 #include "diagnosis/verdicts.h"
@@ -62,6 +63,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
         progress_(progress) {}
 
   int num_folds() const { return static_cast<int>(folds_.size()); }
+  const std::vector<internal::Fold>& folds() const { return folds_; }
   int refinements() const { return refinements_; }
   const internal::HeldOutScales& scales() const { return scales_; }
 
@@ -198,6 +200,14 @@ std::optional<EffectVerdict> UnavailableVerdict(EffectKind kind, const std::vect
   v.value = Eigen::VectorXd::Zero(kind->Dimension(vehicle));
   v.note = reason;
   return v;
+}
+
+// Whether the held-out score leaves a component out: one without rotor term in the linear model
+// (Mz when kd is discarded), whose Table III error is then undefined.
+bool HasUnscoredComponent(const HeldOutGap& baseline) {
+  for (int j = 2; j < kNumWrenchComponents; ++j)
+    if (!baseline.relative_error_pct[j]) return true;
+  return false;
 }
 
 // Where the models are judged: the held-out folds or flights, the linear model fitted on the
@@ -371,7 +381,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.final_effects = final_model.effects;
   diagnosis.final_parameters = final_model.parameters;
   diagnosis.final_parameter_std = final_model.parameter_std;
-  diagnosis.selected = backward.kept;
+  diagnosis.final_model = backward.kept;
   const EffectMask kept = internal::MaskOf(backward.kept);
   const std::vector<EffectKind> kept_kinds = KindsOf(kept);
   for (EffectKind kind : kept_kinds)
@@ -391,7 +401,26 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
                                                       evaluator.scales(), linearization, kept_kinds);
   internal::MarkConfounded(diagnosis.confounded, &verdicts);
   timer.Mark("confounding");
-  for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options, diagnosis.selected);
+
+  // A candidate acting mostly in a component the held-out score leaves out: that component's row
+  // alone, scale-free. Ranked first when it passes: it explains the component the linear model gave
+  // up on (it lost a rotor coefficient there), and the other tests ran on a model it distorts.
+  const internal::ScaleFreeData scale_free{
+      evaluator.folds(),          context.records.at(kept).fold_effects, full.flights, diagnosis.final_effects,
+      diagnosis.final_parameters, diagnosis.final_parameter_std};
+  if (HasUnscoredComponent(diagnosis.baseline)) {
+    // Where the signatures lie, at the linear model: the held-out score leaves out what it leaves
+    // without rotor term, even where the final model brought the coefficient back (a motor lag
+    // restores kd, and the final linearisation then weighs Mz).
+    const internal::EffectLinearization at_linear = internal::LinearizeEffects(
+        full.flights, diagnosis.linear_parameters, all_data.free_parameters, Effects{}, options.candidates);
+    diagnosis.selected_scale_free =
+        internal::SelectInUnscoredComponents(at_linear, scale_free, options, context.vehicle, &verdicts);
+  }
+  diagnosis.selected = diagnosis.selected_scale_free;
+  diagnosis.selected.insert(diagnosis.selected.end(), backward.kept.begin(), backward.kept.end());
+  timer.Mark("scale-free tests");
+  for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options, diagnosis.final_model);
   diagnosis.ranking = internal::Rank(std::move(verdicts), diagnosis.selected, unavailable);
 
   // Where.

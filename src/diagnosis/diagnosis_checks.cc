@@ -35,10 +35,10 @@ std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<
   auto append = [&](std::vector<Check> more) {
     for (Check& c : more) checks.push_back(std::move(c));
   };
-  if (!diagnosis.selected.empty()) {
+  if (!diagnosis.final_model.empty()) {
     append(CheckParameters(Checked(diagnosis.final_parameters, diagnosis.final_parameter_std), configs, "final"));
     bool finite = true;
-    for (EffectKind kind : diagnosis.selected)
+    for (EffectKind kind : diagnosis.final_model)
       finite =
           finite && diagnosis.final_effects.Get(kind).allFinite() && diagnosis.final_effects_std.Get(kind).allFinite();
     if (!finite) checks.push_back({"effects_finite", CheckStatus::kError, "final: NaN or inf in a selected effect"});

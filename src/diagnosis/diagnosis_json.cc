@@ -53,6 +53,24 @@ json TestJson(const EffectTest& test) {
           {"screened", test.screened}};
 }
 
+json ScaleFreeJson(const ScaleFreeTest& t) {
+  json values = json::object();
+  for (size_t k = 0; k < t.labels.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
+    values[t.labels[k]] = {
+        {"value", t.ratio[i]}, {"std", t.ratio_std[i]}, {"ratio", bool(t.over_rotor_coefficient[k])}};
+  }
+  return {{"component", kWrenchComponentNames[static_cast<size_t>(t.component)]},
+          {"rotor_coefficient", t.rotor_coefficient},
+          {"test", TestJson(t.test)},
+          {"relative_error_before_pct", t.relative_error_before_pct},
+          {"relative_error_after_pct", t.relative_error_after_pct},
+          {"values", values},
+          {"si_value", t.value.size() > 0 ? EffectValue(t.value) : json(nullptr)},
+          {"si_std", t.std.size() > 0 ? EffectValue(t.std) : json(nullptr)},
+          {"implausible", t.implausible}};
+}
+
 json LocationJson(const GapLocation& where) {
   json bands = json::array();
   for (const BandGap& b : where.bands)
@@ -137,6 +155,10 @@ json DiagnosisJson(const Diagnosis& d) {
     if (const std::vector<std::string> held = v.kind->HeldLabels(static_cast<int>(v.value.size())); !held.empty())
       entry["magnitude"][name]["held"] = held;
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
+    if (v.scale_free) entry["scale_free"] = ScaleFreeJson(*v.scale_free);
+    // Selected by a scale-free test whose rotor coefficient no fit fixes: no value in SI.
+    if (v.selected && v.scale_free && v.value.size() == 0)
+      entry["magnitude"][name] = {{"value", nullptr}, {"std", nullptr}};
     ranking.push_back(entry);
   }
   json steps = json::array();
@@ -159,7 +181,7 @@ json DiagnosisJson(const Diagnosis& d) {
                           {"distinguishable", c.distinguishable},
                           {"note", c.note}});
   json final_effects = json::object();
-  for (EffectKind kind : d.selected)
+  for (EffectKind kind : d.final_model)
     final_effects[EffectParameterName(kind)] = {{"value", EffectValue(d.final_effects.Get(kind))},
                                                 {"std", EffectValue(d.final_effects_std.Get(kind))}};
   json where = LocationJson(d.where);

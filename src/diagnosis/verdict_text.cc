@@ -39,10 +39,43 @@ bool SizeUndetermined(const EffectVerdict& v) {
 
 }  // namespace
 
+std::string ScaleFreeValueText(const ScaleFreeTest& t) {
+  std::ostringstream out;
+  for (Eigen::Index k = 0; k < t.ratio.size(); ++k)
+    out << (k ? ", " : "") << t.labels[static_cast<size_t>(k)] << " = " << std::setprecision(4) << t.ratio[k] << " +- "
+        << std::setprecision(2) << t.ratio_std[k];
+  return out.str();
+}
+
+std::string ScaleFreeStatement(const EffectVerdict& v) {
+  const ScaleFreeTest& t = *v.scale_free;
+  const char* component = kWrenchComponentNames[static_cast<size_t>(t.component)];
+  std::ostringstream out;
+  out << "the scale-free test of " << component << " (its row alone, every coefficient a ratio to "
+      << t.rotor_coefficient << ", which the linear identification discarded) "
+      << (v.selected                             ? "selects it"
+          : !t.implausible.empty()               ? "finds it implausible"
+          : t.relative_error_before_pct >= 100.0 ? "cannot judge it (the row without it predicts its held-out rows no "
+                                                   "better than zero)"
+                                                 : "finds it not significant")
+      << ": " << ScaleFreeValueText(t) << std::fixed << std::setprecision(1) << "; held-out " << component
+      << " relative error " << t.relative_error_before_pct << " -> " << t.relative_error_after_pct << " % (shrink "
+      << t.test.shrink_pct << " %, F = " << t.test.f_statistic << ", p = " << std::scientific << std::setprecision(1)
+      << t.test.p_value << ")";
+  if (!t.implausible.empty()) out << "; " << t.implausible;
+  if (v.selected)
+    out << (t.value.size() > 0 ? "; in SI with the final fit's " + t.rotor_coefficient + ": " +
+                                     FormatEffectMagnitude(v.kind, t.value, t.std)
+                               : "; " + t.rotor_coefficient + " is not fixed by these flights, so " +
+                                     v.kind->parameter_name() + " itself is not");
+  return out.str();
+}
+
 std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
                         const std::vector<EffectKind>& selected) {
   const std::string given = selected.empty() ? "" : " (with " + Join(selected) + " in the model)";
   std::ostringstream note;
+  if (v.scale_free && v.selected) return ScaleFreeStatement(v);
   if (v.status == "selected") {
     note << "held-out gap shrinks " << std::fixed << std::setprecision(1) << v.test.shrink_pct << " %";
     if (SizeUndetermined(v))
@@ -74,7 +107,10 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
     note << (ratio.maxCoeff() < 1.0 ? "not detected" : "not significant") << "; this data would reveal it above "
          << FormatEffectMagnitude(v.kind, v.detectable_above, Eigen::VectorXd()) << given;
   }
-  if (!v.unscored.empty()) note << "; " << v.unscored;
+  if (v.scale_free)
+    note << "; " << ScaleFreeStatement(v);
+  else if (!v.unscored.empty())
+    note << "; " << v.unscored;
   return note.str();
 }
 
@@ -120,15 +156,15 @@ std::string BandText(const Diagnosis& d, int j) {
   };
   size_t band = 0;
   for (size_t b = 1; b < d.where.bands.size(); ++b) {
-    const bool better = d.selected.empty() ? d.where.bands[b].share_pct[j] > d.where.bands[band].share_pct[j]
-                                           : removed(d.where.bands[b]) > removed(d.where.bands[band]);
+    const bool better = d.final_model.empty() ? d.where.bands[b].share_pct[j] > d.where.bands[band].share_pct[j]
+                                              : removed(d.where.bands[b]) > removed(d.where.bands[band]);
     if (better) band = b;
   }
   const BandGap& bg = d.where.bands[band];
   std::ostringstream out;
   out << std::fixed << ";\n       mostly at " << std::setprecision(0) << bg.low_hz << "-" << bg.high_hz << " Hz ("
       << bg.share_pct[j] << " % of its residual energy";
-  if (!d.selected.empty() && bg.residual_rms[j] > 0.0)
+  if (!d.final_model.empty() && bg.residual_rms[j] > 0.0)
     out << ", of which the selected effects remove " << 100.0 * removed(bg) / (bg.residual_rms[j] * bg.residual_rms[j])
         << " %";
   out << ")";
@@ -172,7 +208,8 @@ std::string WhichText(const Diagnosis& d) {
   if (d.selected.empty()) {
     std::string unscored;
     for (const EffectVerdict& v : d.ranking)
-      if (!v.unscored.empty()) unscored += (unscored.empty() ? "" : ", ") + std::string(EffectName(v.kind));
+      if (!v.unscored.empty() || v.scale_free)
+        unscored += (unscored.empty() ? "" : ", ") + std::string(EffectName(v.kind));
     out << "which: no candidate effect removes significant held-out residual; the model explains these flights "
            "as well as the candidates can"
         << (unscored.empty() ? std::string()
@@ -180,7 +217,9 @@ std::string WhichText(const Diagnosis& d) {
         << "\n";
   }
   for (const EffectVerdict& v : d.ranking) {
-    if (v.selected) {
+    if (v.selected && v.scale_free) {
+      out << (v.kind == d.selected.front() ? "which: " : "     + ") << EffectName(v.kind) << ": " << v.note << "\n";
+    } else if (v.selected) {
       out << (v.kind == d.selected.front() ? "which: " : "     + ") << EffectName(v.kind) << " = "
           << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
           << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
@@ -200,7 +239,7 @@ std::string WhichText(const Diagnosis& d) {
 std::string HowFarText(const Diagnosis& d) {
   std::ostringstream out;
   out << std::fixed << "how far (held-out gap, %; Fx, Fy against the thrust): baseline";
-  for (EffectKind kind : d.selected) out << " -> +" << EffectName(kind);
+  for (EffectKind kind : d.final_model) out << " -> +" << EffectName(kind);
   out << "\n";
   auto value = [&](const std::optional<double>& v) {
     if (v)

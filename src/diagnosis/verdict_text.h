@@ -18,6 +18,13 @@ namespace rotorid::internal {
 std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
                         const std::vector<EffectKind>& selected);
 
+// A scale-free test's values in the units the row fixes: "rotor_inertia_kgm2 / kd = 980.1 +- 12".
+std::string ScaleFreeValueText(const ScaleFreeTest& test);
+
+// What the scale-free test of a verdict (which has one) found: the component, the values, the
+// held-out relative error of the row before and after, the test, and the SI value or why there is none.
+std::string ScaleFreeStatement(const EffectVerdict& v);
+
 // "motor_lag = 300 ms is on its upper bound (300 ms): the data push it further", for an effect
 // that its refinement ended on a bound (RefineResult::on_bound): the coordinates nearest a non-zero
 // bound of its descriptor (the refinement keeps estimates inside those; a zero bound, tau >= 0, is a

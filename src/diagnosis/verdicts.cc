@@ -51,22 +51,28 @@ void ApplyDropped(const SelectionContext& context, const std::vector<DroppedEffe
   }
 }
 
-// Above this share of its signature in components without weight, no test here can see an effect.
-constexpr double kMostlyUnscored = 0.5;
+}  // namespace
+
+UnscoredShare MostlyUnscoredShare(const EffectLinearization& linearization, EffectKind kind) {
+  UnscoredShare out;
+  const auto k = std::find(linearization.kinds.begin(), linearization.kinds.end(), kind);
+  if (k == linearization.kinds.end() || linearization.unscored_components.empty()) return out;
+  for (size_t c = 0; c < linearization.column_kind.size(); ++c) {
+    const double column_share = linearization.effect_unscored_share[static_cast<Eigen::Index>(c)];
+    if (linearization.column_kind[c] == k - linearization.kinds.begin() && column_share > out.share) {
+      out.share = column_share;
+      out.label = linearization.labels[c];
+    }
+  }
+  return out;
+}
+
+namespace {
 
 // Why a candidate acting mostly where nothing is scored is not ruled out; empty otherwise.
 std::string UnscoredStatement(const EffectLinearization& linearization, EffectKind kind) {
-  const auto k = std::find(linearization.kinds.begin(), linearization.kinds.end(), kind);
-  if (k == linearization.kinds.end() || linearization.unscored_components.empty()) return "";
-  double share = 0.0;
-  size_t most = 0;  // its column with the largest share
-  for (size_t c = 0; c < linearization.column_kind.size(); ++c) {
-    const double column_share = linearization.effect_unscored_share[static_cast<Eigen::Index>(c)];
-    if (linearization.column_kind[c] == k - linearization.kinds.begin() && column_share > share) {
-      share = column_share;
-      most = c;
-    }
-  }
+  const UnscoredShare unscored = MostlyUnscoredShare(linearization, kind);
+  const double share = unscored.share;
   if (!(share > kMostlyUnscored)) return "";
   std::string components, coefficients;
   for (int j : linearization.unscored_components) {
@@ -76,8 +82,7 @@ std::string UnscoredStatement(const EffectLinearization& linearization, EffectKi
       coefficients += (coefficients.empty() ? "" : ", ") + coefficient;
   }
   std::ostringstream out;
-  out << "but " << std::lround(100.0 * share) << " % of " << linearization.labels[most] << "'s signature lies in "
-      << components
+  out << "but " << std::lround(100.0 * share) << " % of " << unscored.label << "'s signature lies in " << components
       << ", which no test here scores (the linear identification discarded " << coefficients
       << ", so that component has no rotor term): this data cannot rule it out, and an unmodelled effect there "
          "can be what made "

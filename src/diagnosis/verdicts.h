@@ -19,6 +19,19 @@ namespace rotorid::internal {
 Eigen::VectorXd DetectableSizes(const Eigen::VectorXd& std_dev, int parameters, double effective_samples,
                                 const DiagnosisOptions& options);
 
+// Above this share of its signature in components without weight, no held-out test of the scored
+// components can see an effect.
+inline constexpr double kMostlyUnscored = 0.5;
+
+// The largest share of one of the effect's coordinates' signature that falls in components without
+// weight (EffectLinearization::effect_unscored_share), and that coordinate's label; 0 and empty when
+// every component is weighed.
+struct UnscoredShare {
+  double share = 0.0;
+  std::string label;
+};
+UnscoredShare MostlyUnscoredShare(const EffectLinearization& linearization, EffectKind kind);
+
 // The selection as it ended, and the final model on all identification data.
 struct SelectionOutcome {
   const ForwardSelection& forward;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "diagnosis/verdict_text.h"
 #include "report/html_text.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
@@ -47,8 +48,15 @@ std::string BandLabel(const BandGap& band) {
 // "value ± std unit" of the effect's parameter.
 std::string MagnitudeCell(const EffectVerdict& v) {
   const std::string name = EffectParameterName(v.kind);
-  return "<code>" + Html(name) + "</code><br/>" +
-         ValueWithStd(Values(v.value), Values(v.std), EffectParameterUnit(name));
+  std::string cell = "<code>" + Html(name) + "</code><br/>";
+  // Selected by a scale-free test: its value as a ratio to the rotor coefficient (the SI value
+  // only where the final fit fixes that coefficient).
+  if (v.selected && v.scale_free) {
+    cell += Html(ScaleFreeValueText(*v.scale_free));
+    if (v.value.size() > 0) cell += "<br/>" + ValueWithStd(Values(v.value), Values(v.std), EffectParameterUnit(name));
+    return cell;
+  }
+  return cell + ValueWithStd(Values(v.value), Values(v.std), EffectParameterUnit(name));
 }
 
 std::string DetectableCell(const EffectVerdict& v) {

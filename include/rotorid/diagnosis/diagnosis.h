@@ -104,6 +104,33 @@ struct EffectTest {
   bool screened = false;
 };
 
+// The scale-free test of a candidate whose signature lies mostly in a component the held-out score
+// leaves out (Mz when the linear identification discarded kd: the yaw row I_zz w_z' + J sum(+-Omega')
+// = kd sum(+-Omega^2) fixes only ratios to kd, not their common scale). That component's row alone is
+// fitted with its rotor coefficient's column fixed at 1, every other coefficient a ratio to it, on the
+// same held-out folds or flights, without and with the candidate; its held-out relative error
+// (||row residual|| / ||rotor term||, Table III's, which the common scale drops out of) is what the
+// F-test judges (docs/diagnosis.md, "The scale-free test of an unscored component").
+struct ScaleFreeTest {
+  int component = 5;                       // the row tested (kWrenchComponentNames)
+  std::string rotor_coefficient;           // its rotor coefficient, fixed at 1: "kd" (Mz) or "kt"
+  EffectTest test;                         // held out: the whitened row residual without vs with the candidate
+  double relative_error_before_pct = 0.0;  // held out, without the candidate
+  double relative_error_after_pct = 0.0;   // held out, with it
+  // Fitted on all identification data, per coordinate: the value in the units the row fixes, a
+  // ratio to the rotor coefficient where the candidate's term does not scale with it (a rotor
+  // inertia's torque: J / kd, dimensionless), else the parameter itself; with its label
+  // ("rotor_inertia_kgm2 / kd") and std.
+  std::vector<std::string> labels;
+  Eigen::VectorXd ratio, ratio_std;
+  std::vector<bool> over_rotor_coefficient;
+  // The value in SI (ratio times the rotor coefficient of the final fit), only when that fit fixes
+  // the coefficient (relative std below 10 %); else empty.
+  Eigen::VectorXd value, std;
+  // Significant, but with a sign its physics excludes (J / kd < 0 beyond 3 std): which, else empty.
+  std::string implausible;
+};
+
 // One candidate effect, as the diagnosis judged it.
 struct EffectVerdict {
   EffectKind kind = nullptr;
@@ -142,6 +169,11 @@ struct EffectVerdict {
   // Not selected, and most of its signature falls in a component no test scores (Mz when the linear
   // identification discarded kd): why this data cannot rule it out (also in `note`).
   std::string unscored;
+  // Its scale-free test there (ScaleFreeTest), when it was run. A candidate that passes it is
+  // selected (`status` "selected", `test` this test's) but not refined into the final model, whose
+  // scale for it the data do not fix: `value` and `std` are then its SI value when the final fit
+  // fixes the rotor coefficient, else empty.
+  std::optional<ScaleFreeTest> scale_free;
 };
 
 struct ConfoundedEffects {
@@ -178,7 +210,14 @@ struct Diagnosis {
   int where_component = 0;  // largest baseline model_error_pct (the gap beyond the noise floor)
   GapLocation where;
   std::vector<EffectVerdict> ranking;  // selected in order, then the others by shrink
+  // Every selected effect: those a scale-free test selected (selected_scale_free) first, then the
+  // final model's (final_effects, steps) in the order they were added.
   std::vector<EffectKind> selected;
+  // Selected by the scale-free test of a component the held-out score leaves out: not in the final
+  // model (EffectVerdict::scale_free).
+  std::vector<EffectKind> selected_scale_free;
+  // The selected effects the final model carries, in the order they were added.
+  std::vector<EffectKind> final_model;
   std::vector<SelectionStep> steps;
   HeldOutGap final_gap;  // with the selected effects, held-out
   // The final model fitted on all identification data.
