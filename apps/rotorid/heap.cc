@@ -1,19 +1,27 @@
 #include "heap.h"
 
+#include <cstdlib>  // defines __GLIBC__ with glibc
+
+// glibc 2.33 or later (mallinfo2); not under AddressSanitizer, whose allocator replaces glibc's.
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#if __GLIBC_PREREQ(2, 33)
+#define ROTORID_TUNE_GLIBC_HEAP 1
+#endif
+#endif
+
+#ifdef ROTORID_TUNE_GLIBC_HEAP
 #include <malloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdint>
-#include <cstdlib>
 #include <limits>
 #endif
 
 namespace rotorid::cli {
 
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#ifdef ROTORID_TUNE_GLIBC_HEAP
 namespace {
 
 constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;  // x86-64 and arm64 with 4 KiB pages
