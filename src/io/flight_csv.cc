@@ -71,8 +71,7 @@ struct FlightTable {
   std::vector<std::string> names;         // per cell
   std::vector<bool> known;                // per cell: a column rotorid reads
   std::map<std::string, int> index;       // name -> cell
-  std::vector<std::vector<double>> data;  // per cell; empty for ignored columns
-  std::vector<int> row_lines;             // file line of each data row
+  std::vector<TableRows> parts;           // the rows, in file order, as the stretches read them
 
   std::optional<int> Find(const std::string& name) const {
     const auto it = index.find(name);
@@ -84,8 +83,29 @@ struct FlightTable {
     if (!k) throw Error(Located(source, header_line, 0, "missing required column '" + name + "'"));
     return *k;
   }
-  Eigen::Map<const Eigen::VectorXd> Column(int cell) const {
-    return {data[cell].data(), static_cast<Eigen::Index>(row_lines.size())};
+  Eigen::Index num_rows() const {
+    size_t rows = 0;
+    for (const TableRows& part : parts) rows += part.row_lines.size();
+    return static_cast<Eigen::Index>(rows);
+  }
+  int RowLine(Eigen::Index row) const {
+    for (const TableRows& part : parts) {
+      if (row < static_cast<Eigen::Index>(part.row_lines.size())) return part.row_lines[static_cast<size_t>(row)];
+      row -= static_cast<Eigen::Index>(part.row_lines.size());
+    }
+    return 0;
+  }
+  // The parts' values joined (no joined copy of every column is kept: a 1 h log's are 60 MB).
+  Eigen::VectorXd Column(int cell) const {
+    Eigen::VectorXd column(num_rows());
+    Eigen::Index row = 0;
+    for (const TableRows& part : parts) {
+      const std::vector<double>& values = part.data[static_cast<size_t>(cell)];
+      column.segment(row, static_cast<Eigen::Index>(values.size())) =
+          Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+      row += static_cast<Eigen::Index>(values.size());
+    }
+    return column;
   }
 };
 
@@ -111,7 +131,6 @@ void ReadHeader(const internal::TextLine& line, FlightTable* table) {
     if (!table->index.emplace(name, static_cast<int>(k)).second)
       throw Error(Located(table->source, line.number, CellColumn(line.text, k), "duplicate column '" + name + "'"));
   }
-  table->data.resize(names.size());
 }
 
 // Only the columns rotorid reads must hold numbers. The cells are taken off the line one by one
@@ -143,26 +162,28 @@ void ReadRow(const internal::TextLine& line, const FlightTable& table, TableRows
   rows->row_lines.push_back(line.number);
 }
 
-// The rows of `text`, whose line before the first is `line_number`. Blank lines are skipped; '#'
-// lines are comments wherever they stand.
-TableRows ReadRows(std::string_view text, int line_number, const FlightTable& table) {
+// Room for `lines` rows in every column rotorid reads: no reallocation while the columns fill.
+TableRows ReserveRows(const FlightTable& table, size_t lines) {
   TableRows rows;
-  // At most one row per line: no reallocation while the columns fill.
-  const size_t lines = static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
   rows.data.resize(table.names.size());
   rows.row_lines.reserve(lines);
   for (size_t k = 0; k < rows.data.size(); ++k)
     if (table.known[k]) rows.data[k].reserve(lines);
+  return rows;
+}
+
+// The rows of `text`, whose line before the first is `line_number`, into `rows` (reserved for
+// them). Blank lines are skipped; '#' lines are comments wherever they stand.
+void ReadRows(std::string_view text, int line_number, const FlightTable& table, TableRows* rows) {
   internal::TextLine line;
   while (internal::NextLine(&text, &line_number, &line)) {
     const std::string_view trimmed = TrimSpaces(line.text);
     if (trimmed.empty()) continue;
     if (trimmed.front() == '#')
-      ReadCommentLine(trimmed, &rows.metadata);
+      ReadCommentLine(trimmed, &rows->metadata);
     else
-      ReadRow(line, table, &rows);
+      ReadRow(line, table, rows);
   }
-  return rows;
 }
 
 // A log's rows are parsed in this many stretches at once, split at line ends; below
@@ -175,6 +196,7 @@ constexpr size_t kParallelParseBytes = size_t{1} << 20;
 void ReadBody(std::string_view body, int line_number, FlightTable* table) {
   std::vector<std::string_view> stretches;
   std::vector<int> first_lines;
+  std::vector<TableRows> parts;
   while (!body.empty()) {
     const size_t remaining = static_cast<size_t>(kParseThreads) - stretches.size();
     size_t end = body.size();
@@ -184,30 +206,26 @@ void ReadBody(std::string_view body, int line_number, FlightTable* table) {
     }
     stretches.push_back(body.substr(0, end));
     first_lines.push_back(line_number);
-    line_number += static_cast<int>(std::count(stretches.back().begin(), stretches.back().end(), '\n'));
+    const size_t lines = static_cast<size_t>(std::count(stretches.back().begin(), stretches.back().end(), '\n'));
+    line_number += static_cast<int>(lines);
+    // Allocated here, not by the parsing threads: memory a thread allocates stays in its own
+    // arena once freed (glibc), where this thread's later arrays cannot reuse it (1 h log: +60 MB).
+    parts.push_back(ReserveRows(*table, lines + 1));
     body.remove_prefix(end);
   }
-  std::vector<TableRows> parts(stretches.size());
   std::vector<std::exception_ptr> failures(stretches.size());
   internal::ParallelFor(static_cast<int>(stretches.size()), kParseThreads, [&](int i) {
     try {
-      parts[i] = ReadRows(stretches[i], first_lines[i], *table);
+      ReadRows(stretches[i], first_lines[i], *table, &parts[i]);
     } catch (...) {
       failures[i] = std::current_exception();
     }
   });
   for (const std::exception_ptr& failure : failures)
     if (failure) std::rethrow_exception(failure);
-  if (parts.empty()) return;
-  table->data = std::move(parts.front().data);
-  table->row_lines = std::move(parts.front().row_lines);
-  for (size_t i = 0; i < parts.size(); ++i) {
-    for (auto& [key, value] : parts[i].metadata) table->metadata[key] = std::move(value);
-    if (i == 0) continue;
-    for (size_t k = 0; k < table->data.size(); ++k)
-      table->data[k].insert(table->data[k].end(), parts[i].data[k].begin(), parts[i].data[k].end());
-    table->row_lines.insert(table->row_lines.end(), parts[i].row_lines.begin(), parts[i].row_lines.end());
-  }
+  for (TableRows& part : parts)
+    for (auto& [key, value] : part.metadata) table->metadata[key] = std::move(value);
+  table->parts = std::move(parts);
 }
 
 // Comments and blank lines may precede the header; the first other line is the header.
@@ -231,7 +249,7 @@ FlightTable ReadTable(const std::string& text, const std::string& source) {
 }
 
 Eigen::MatrixX3d ReadVector3(const FlightTable& table, const std::string& prefix) {
-  Eigen::MatrixX3d out(table.row_lines.size(), 3);
+  Eigen::MatrixX3d out(table.num_rows(), 3);
   const char* axes[3] = {"x", "y", "z"};
   for (int a = 0; a < 3; ++a) out.col(a) = table.Column(table.Require(prefix + axes[a]));
   return out;
@@ -252,7 +270,7 @@ Eigen::MatrixXd ReadRotors(const FlightTable& table, int num_rotors) {
                             std::to_string(num_rotors) + " rotors: give every rotor in the vehicle file"));
   std::vector<int> rotor_columns;  // all located before any allocation that scales with the count
   for (int r = 0; r < num_rotors; ++r) rotor_columns.push_back(table.Require("rotor_" + std::to_string(r + 1)));
-  Eigen::MatrixXd rotors(table.row_lines.size(), num_rotors);
+  Eigen::MatrixXd rotors(table.num_rows(), num_rotors);
   for (int r = 0; r < num_rotors; ++r) {
     rotors.col(r) = table.Column(rotor_columns[r]);
     if ((rotors.col(r).array() < 0.0).any())
@@ -265,7 +283,7 @@ Eigen::MatrixXd ReadRotors(const FlightTable& table, int num_rotors) {
 
 // roll, pitch, yaw, else the quaternion qw, qx, qy, qz turned into them.
 Eigen::MatrixX3d ReadAttitude(const FlightTable& table) {
-  const int n = static_cast<int>(table.row_lines.size());
+  const int n = static_cast<int>(table.num_rows());
   Eigen::MatrixX3d bryant(n, 3);
   if (table.Find("roll")) {
     bryant.col(0) = table.Column(table.Require("roll"));
@@ -321,13 +339,13 @@ FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int
   FlightTable table = ReadTable(text, source);
   const int t_col = table.Require("t");
   for (const char* name : {"gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"}) table.Require(name);
-  internal::RequireMinFlightSamples(source, static_cast<int>(table.row_lines.size()));
+  internal::RequireMinFlightSamples(source, static_cast<int>(table.num_rows()));
 
   FlightLog log;
   log.source = source;
   log.t_s = table.Column(t_col);
   if (const std::optional<int> i = internal::FirstNonIncreasingTime(log.t_s)) {
-    throw Error(Located(source, table.row_lines[*i], 1,
+    throw Error(Located(source, table.RowLine(*i), 1,
                         "time goes backwards or repeats: t = " + std::to_string(log.t_s[*i]) + " after " +
                             std::to_string(log.t_s[*i - 1])));
   }
