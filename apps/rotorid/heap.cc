@@ -35,8 +35,9 @@ constexpr int kMmapThreshold = 32 << 20;  // glibc's largest
 // them on free, so every one is faulted in page by page: 3700 faults, a third of an identify of a
 // 90 s log on the project's virtual machine, and two thirds of one of a 1 h log. Here the arrays
 // come from one heap that keeps what is freed, and the heap's first gigabyte is backed by 2 MiB
-// pages where the kernel has them (transparent huge pages on request, the usual setting): 90 s
-// identify 102 -> 61 ms, 1 h 4.1 -> 1.2 s, the same peak memory (docs/benchmarks.md).
+// pages where the kernel has them (transparent huge pages on request, the usual setting). Alone,
+// on a loaded machine: 90 s identify 90 -> 56 ms, 1 h 4.1 -> 1.2 s, the same peak memory
+// (docs/benchmarks.md, "Issue 14, eighth session").
 void PrepareHeapForLargeArrays() {
   // Reserve at most a quarter of the machine's memory: virtual address space only, but a kernel
   // that does not overcommit counts it.
