@@ -1,4 +1,3 @@
-#include <algorithm>
 #include <iostream>
 #include <memory>
 
@@ -85,10 +84,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
       throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(checks));
     }
     progress.reset();
-    std::vector<std::string> configs;
-    for (const ProcessedFlight& f : flights)
-      if (std::find(configs.begin(), configs.end(), f.vehicle.name) == configs.end()) configs.push_back(f.vehicle.name);
-    for (Check& c : CheckDiagnosis(result, configs)) checks.push_back(std::move(c));
+    for (Check& c : CheckDiagnosis(result, ConfigurationNames(flights))) checks.push_back(std::move(c));
 
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
                                      {"tls", TlsOptionsJson(diagnosis.identify.tls)},

@@ -8,6 +8,7 @@
 
 #include "diagnosis/verdicts.h"
 #include "refine/effect_rows.h"
+#include "rotorid/ident/identify.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/signal/autocorrelation.h"
@@ -177,16 +178,18 @@ RatioDesign DesignOf(const std::vector<ComponentRows>& rows, const RowLayout& la
   return design;
 }
 
-// Minimises ||target + x b||, the columns equilibrated first (the rotor, inertia and first-moment
-// columns differ by orders of magnitude); collinear columns (I_xx and I_yy in Mz: -w_x w_y and
-// w_x w_y) get the minimum-norm split, which leaves the residual unchanged.
-Eigen::VectorXd SolveRow(const RatioDesign& design) {
-  const Eigen::VectorXd norms = design.x.colwise().norm().transpose();
+// The least-squares solution b of x b = rhs, the columns of x equilibrated first (the rotor, inertia
+// and first-moment columns differ by orders of magnitude); collinear columns (I_xx and I_yy in Mz:
+// -w_x w_y and w_x w_y) get the minimum-norm split, which leaves the residual unchanged.
+Eigen::MatrixXd EquilibratedLeastSquares(const Eigen::MatrixXd& x, const Eigen::MatrixXd& rhs) {
+  const Eigen::VectorXd norms = x.colwise().norm().transpose();
   const Eigen::VectorXd inverse = norms.unaryExpr([](double v) { return v > 0.0 ? 1.0 / v : 0.0; });
-  const Eigen::MatrixXd scaled = design.x * inverse.asDiagonal();
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(scaled);
-  return inverse.asDiagonal() * cod.solve(-design.target);
+  const Eigen::MatrixXd scaled = x * inverse.asDiagonal();
+  return inverse.asDiagonal() * Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(scaled).solve(rhs);
 }
+
+// Minimises ||target + x b||.
+Eigen::VectorXd SolveRow(const RatioDesign& design) { return EquilibratedLeastSquares(design.x, -design.target); }
 
 Eigen::VectorXd RowResidual(const RatioDesign& design, const Eigen::VectorXd& b) {
   return design.target + design.x * b;
@@ -255,14 +258,6 @@ HeldOutGap RowGap(const std::vector<Eigen::VectorXd>& residual, const std::vecto
   return gap;
 }
 
-// Index per configuration name, in the order the flights first name them.
-std::vector<std::string> ConfigNames(const std::vector<ProcessedFlight>& flights) {
-  std::vector<std::string> names;
-  for (const ProcessedFlight& f : flights)
-    if (std::find(names.begin(), names.end(), f.vehicle.name) == names.end()) names.push_back(f.vehicle.name);
-  return names;
-}
-
 std::vector<ComponentRows> RowsOfFlights(const std::vector<ProcessedFlight>& flights, const Effects& model,
                                          EffectKind kind, int component, const std::vector<std::string>& configs) {
   std::vector<ComponentRows> rows;
@@ -327,12 +322,7 @@ void ValueOnAllData(EffectKind kind, const std::vector<ComponentRows>& rows, con
   const double factor = AutocorrelationFactor(Segments(residual, fits.with.segment_end));
   const Eigen::MatrixXd others = fits.with.x.leftCols(p), candidate = fits.with.x.rightCols(q);
   Eigen::MatrixXd projected = candidate;
-  if (p > 0) {
-    const Eigen::VectorXd norms = others.colwise().norm().transpose();
-    const Eigen::VectorXd inverse = norms.unaryExpr([](double v) { return v > 0.0 ? 1.0 / v : 0.0; });
-    const Eigen::MatrixXd scaled = others * inverse.asDiagonal();
-    projected -= scaled * Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(scaled).solve(candidate);
-  }
+  if (p > 0) projected -= others * EquilibratedLeastSquares(others, candidate);
   const Eigen::MatrixXd covariance =
       sigma2 * factor *
       Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(projected.transpose() * projected).pseudoInverse();
@@ -389,7 +379,7 @@ ScaleFreeTest TestScaleFree(EffectKind kind, int component, const ScaleFreeData&
                             const DiagnosisOptions& options) {
   ScaleFreeTest out;
   out.component = component;
-  const std::vector<std::string> configs = ConfigNames(data.flights);
+  const std::vector<std::string> configs = ConfigurationNames(data.flights);
   const std::vector<ComponentRows> all_rows = RowsOfFlights(data.flights, data.final_effects, kind, component, configs);
   const RowLayout layout = LayoutOf(all_rows, component, static_cast<int>(configs.size()));
   out.rotor_coefficient = kRotorCoefficientNames[static_cast<size_t>(layout.target)];

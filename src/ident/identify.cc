@@ -75,6 +75,13 @@ void LabelFirstMoments(FirstMoment mode, std::vector<ProcessedFlight>* flights) 
   }
 }
 
+std::vector<std::string> ConfigurationNames(const std::vector<ProcessedFlight>& flights) {
+  std::vector<std::string> names;
+  for (const ProcessedFlight& f : flights)
+    if (std::find(names.begin(), names.end(), f.vehicle.name) == names.end()) names.push_back(f.vehicle.name);
+  return names;
+}
+
 Eigen::VectorXd FlightChiT(const ProcessedFlight& flight, const std::map<std::string, double>& parameters) {
   Eigen::VectorXd chi_t(kNumIdimColumns);
   auto get = [&](const std::string& name) {

@@ -93,6 +93,9 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
 // logs (log_index; a flight without one counts as a log of its own) of its configuration from 1.
 void LabelFirstMoments(FirstMoment mode, std::vector<ProcessedFlight>* flights);
 
+// The configurations (vehicle names) of `flights`, in the order the flights first name them.
+std::vector<std::string> ConfigurationNames(const std::vector<ProcessedFlight>& flights);
+
 // Per-flight fit (Table III per flight, mean force residuals) of parameters on processed flights.
 // `parameters` maps names ("kt", "kd", "<config>.<name>") to values; missing body parameters of a
 // flight's configuration are an error.
