@@ -510,6 +510,35 @@ class BoundContactCallback : public ceres::IterationCallback {
   EffectBounds* bounds_;
 };
 
+// Ends the first pass of a refinement that re-selects the essential set once its steps are small
+// and Ceres' model of the cost keeps overestimating the curvature: the ratio of actual to predicted
+// decrease stays near 2 (1.84 on a 90 s simulated log with every effect, 1.98 on real Crazyflie
+// flights: a curvature 6-50 times too high in some direction, presumably where the TLS criterion's
+// curvature A - lambda N is far below the Gauss-Newton model's A), and each step then shrinks the
+// cost change by 0.7 or less, for 28-83 steps. That pass only starts the passes that follow, whose
+// TLS weights come from the rows with its effects; they settle as before (refine with every effect,
+// 90 s: 38 -> 13 iterations, the result within 1e-5 std; real jana01/04/06: the criterion within
+// 0.2 %, values within 0.45 std along their 0.99-correlated pairs). A final pass keeps its slow steps.
+class SlowStartPassCallback : public ceres::IterationCallback {
+ public:
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    const bool slow = summary.iteration > 0 && summary.step_is_successful &&
+                      summary.relative_decrease > kOverestimatedCurvatureRatio &&
+                      summary.cost_change < kSmallStep * summary.cost;
+    slow_steps_ = slow ? slow_steps_ + 1 : 0;
+    stopped_ = slow_steps_ >= 2;
+    return stopped_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+  bool stopped() const { return stopped_; }
+
+ private:
+  // A ratio of 1.5 means the model's curvature is 4 times too high (ratio = 2 - 1/that factor).
+  static constexpr double kOverestimatedCurvatureRatio = 1.5;
+  static constexpr double kSmallStep = 1e-4;  // relative cost change
+  int slow_steps_ = 0;
+  bool stopped_ = false;
+};
+
 // The gradient of the cost over every free effect coordinate (block order), nothing held.
 std::vector<double> EffectGradient(EffectProblem* ep, int num_threads) {
   ceres::Problem::EvaluateOptions evaluate;
@@ -523,15 +552,18 @@ std::vector<double> EffectGradient(EffectProblem* ep, int num_threads) {
 
 // Solves the problem with the active set above and records the solver's report (iterations and time
 // over every solve of it); throws when the solution is unusable. The iteration limit is the total.
-// A relative cost change of `function_tolerance` per step ends it.
-void SolveEffectProblem(const RefineOptions& options, double function_tolerance, EffectProblem* ep,
-                        RefineResult* result) {
+// A `start_pass` (SlowStartPassCallback) also ends in the slow regime.
+void SolveEffectProblem(const RefineOptions& options, bool start_pass, EffectProblem* ep, RefineResult* result) {
   ceres::Solver::Options solver_options;
   // The normal equations of the tall, narrow Jacobian (rows x 20-30 columns): J^T J by a symmetric
   // rank update is several times cheaper than a QR of J, and Ceres' QR also copies J (200 MB on a
   // 1 h log). The steps differ in round-off only; the solution within the tolerances below.
   solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver_options.function_tolerance = function_tolerance;
+  // A relative cost change of 1e-8 per step (Ceres' default: 1e-6): stopping there moved no refined
+  // parameter or effect by more than 0.02 of its std against 1e-10, and 1e-10 none by more than
+  // 1e-3 against 1e-12 (refine and diagnose JSON, the simulated recovery studies, the real
+  // Crazyflie refinements; no verdict changed).
+  solver_options.function_tolerance = 1e-8;
   solver_options.gradient_tolerance = 1e-14;
   solver_options.parameter_tolerance = 1e-12;
   solver_options.num_threads = options.num_threads;
@@ -544,6 +576,8 @@ void SolveEffectProblem(const RefineOptions& options, double function_tolerance,
   EffectBounds bounds(options, ep);
   BoundContactCallback contact(&bounds);
   solver_options.callbacks.push_back(&contact);
+  SlowStartPassCallback slow;
+  if (start_pass) solver_options.callbacks.push_back(&slow);
   solver_options.update_state_every_iteration = true;  // the callback reads the effects' values
   int iterations = 0;
   result->solver.seconds = 0.0;
@@ -560,6 +594,7 @@ void SolveEffectProblem(const RefineOptions& options, double function_tolerance,
               << summary.num_residual_evaluations << " cost and " << summary.num_jacobian_evaluations
               << " Jacobian evaluations), " << TerminationName(summary.termination_type);
     if (!summary.IsSolutionUsable()) break;
+    if (slow.stopped()) break;
     const bool contact_ended_it = summary.termination_type == ceres::USER_SUCCESS;
     bounds.Apply(false);
     if (iterations >= options.max_iterations) break;
@@ -569,9 +604,10 @@ void SolveEffectProblem(const RefineOptions& options, double function_tolerance,
   bounds.Apply(false);
   result->solver.iterations = iterations;
   result->solver.final_cost = summary.final_cost;
-  result->solver.termination = summary.termination_type == ceres::USER_SUCCESS
-                                   ? "no convergence (iteration limit)"
-                                   : TerminationName(summary.termination_type);
+  result->solver.termination = slow.stopped() ? "start pass: ended where its steps were slow"
+                                : summary.termination_type == ceres::USER_SUCCESS
+                                    ? "no convergence (iteration limit)"
+                                    : TerminationName(summary.termination_type);
   result->solver.message = summary.message;
   result->solver.full_report = summary.FullReport();
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);
@@ -700,25 +736,12 @@ void ComputeRefinedCovariance(const EffectProblem& ep, const SolutionJacobian& j
   result->effect_correlation = sd.cwiseInverse().asDiagonal() * effect_cov * sd.cwiseInverse().asDiagonal();
 }
 
-// A relative cost change per step that ends a pass (Ceres' default: 1e-6). 1e-8 for a pass whose
-// result is reported: stopping there moved no refined parameter or effect by more than 0.02 of its
-// std against 1e-10, and 1e-10 none by more than 1e-3 against 1e-12 (refine and diagnose JSON, the
-// simulated recovery studies, the real Crazyflie refinements; no verdict changed).
-constexpr double kFunctionTolerance = 1e-8;
-// The first pass of a refinement that re-selects the essential set is only the start of the passes
-// that follow: its TLS weights are the linear step's, fitted to the rows without effects, and on
-// them the Gauss-Newton model overestimates the curvature about six-fold (Ceres' ratio of actual to
-// predicted decrease stays at 1.84), so that its last steps shrink the cost 0.7-fold each. 1e-4
-// stops it after 99 % of its decrease instead of 28 steps later (refine with every effect, 90 s: 38
-// -> 12 iterations in all); the final pass starts nearer or further and settles as before.
-constexpr double kStartPassFunctionTolerance = 1e-4;
-
 // One Ceres pass: the rows of the flights with effects, the criterion (lambda, N) of `tls` on a
 // system of this layout, with its `anchors` (AnchorFlights), started at tls.chi and `start`. Fills
-// chi, effects, their covariance and the solver report.
+// chi, effects, their covariance and the solver report. A `start_pass` ends in the slow regime.
 RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const IdimLayout& system,
                           std::vector<internal::RotorMomentAnchor> anchors, const TlsSolution& tls,
-                          const Effects& start, const RefineOptions& options, double function_tolerance) {
+                          const Effects& start, const RefineOptions& options, bool start_pass) {
   RefineResult result;
   result.enabled = options.effects;
   EffectProblem ep;
@@ -730,7 +753,7 @@ RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const Idi
   ep.problem = std::make_unique<ceres::Problem>(problem_options);
   AddRowResiduals(flights, system, tls, options, &ep);
   ConstrainParameters(options, &ep);
-  SolveEffectProblem(options, function_tolerance, &ep, &result);
+  SolveEffectProblem(options, start_pass, &ep, &result);
 
   const Eigen::VectorXd chi = ep.scaled_chi.cwiseProduct(ep.context.chi_scale);
   result.effects = ep.effect_blocks.At(ep.blocks_of_residual.data(), flights.front().vehicle);
@@ -821,7 +844,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   RefineResult result = SolveEffects(linear.flights, linear.system,
                                      AnchorFlights(linear.flights, Effects{}, linear.system, linear.solution, options),
                                      linear.solution, start, options,
-                                     reselects ? kStartPassFunctionTolerance : kFunctionTolerance);
+                                     /*start_pass=*/reselects);
   step_done();
   if (reselects) {
     // The TLS weights and equation-error variances of the linear step were fitted to the residual of
@@ -840,7 +863,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
           finish.coarse_delay_search = false;
           result = SolveEffects(linear.flights, linear.system,
                                 AnchorFlights(linear.flights, Effects{}, linear.system, linear.solution, options),
-                                linear.solution, result.effects, finish, kFunctionTolerance);
+                                linear.solution, result.effects, finish, /*start_pass=*/false);
         }
         break;
       }
@@ -849,7 +872,8 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       RefineOptions next = options;
       next.coarse_delay_search = false;
       RefineResult candidate =
-          SolveEffects(linear.flights, corrected, std::move(anchors), reselected, result.effects, next, kFunctionTolerance);
+          SolveEffects(linear.flights, corrected, std::move(anchors), reselected, result.effects, next,
+                       /*start_pass=*/false);
       candidate.reselected = reselected;
       result = std::move(candidate);
       step_done();
