@@ -44,7 +44,8 @@ struct HeldOutResidual {
 
 // Per evaluation flight (row) and component (column), from the baseline: the RMS of its residual
 // (1 where it is 0), so that the baseline's mean square is 1 in every flight and component and the
-// components weigh the same; and the RMS of its rotor-model wrench (0 where it has none).
+// components weigh the same; and the RMS of its rotor-model wrench (0 where it has none), in Mx and
+// My about each held-out segment's mean (the static moment a first moment balances is no scale).
 struct HeldOutScales {
   Eigen::MatrixXd residual_rms;
   Eigen::MatrixXd wrench_rms;
@@ -56,7 +57,9 @@ HeldOutScales BaselineScales(const HeldOutResidual& baseline, int num_flights);
 // model's where both have one. The second factor makes the score blind to a row group's free
 // scale: in the yaw row kd and I_zz can shrink together (a delay the model lacks makes the linear
 // fit do so), and a model's residual shrinks with them whether it is right or not; measured
-// against its own rotor wrench, as Table III measures it, it cannot.
+// against its own rotor wrench, as Table III measures it, it cannot. In Mx and My the wrench is
+// measured about its mean: else a static moment that a moved first moment cancels (per-rotor thrust
+// scales near hover) inflates the divisor, and the score, without the residual falling.
 Eigen::MatrixXd ResidualWeights(const HeldOutResidual& model, const HeldOutScales& scales);
 
 // Expected sum of squared residuals per component that the white sensor noise of the signals

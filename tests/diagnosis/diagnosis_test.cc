@@ -11,6 +11,8 @@
 #include "rotorid/core/error.h"
 #include "rotorid/diagnosis/diagnosis_checks.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
+#include "rotorid/io/flight_csv.h"
+#include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
@@ -318,6 +320,29 @@ TEST(DiagnosisTest, LeverArmDoesNotTakeTheFirstMomentsPlaceAlongZ) {
   // It still says what it would reveal, in x and y only.
   ASSERT_EQ(v.detectable_above.size(), 3);
   EXPECT_GT(v.detectable_above[0], 0.0);
+}
+
+// The independent simulator's take-off / low hover / landing flight (ground_effect_coefficient 1):
+// the ground effect alone is selected. Before the held-out score left the static part of Mx and My out
+// of its divisor, per-rotor thrust scales (1.1, -0.3, -0.9, 0.1) % and then a lever arm (-8.8, 0.3) mm
+// were selected beside it: the scales, with a first moment moved to cancel them, inflated the rotor
+// moment the score divides by (held-out "shrink" 6.0 %) while the residual did not fall. Release only
+// (scripts/test.sh): HeldOutScoreTest.AStaticMomentThatAFirstMomentBalancesDoesNotPay runs its path.
+TEST(DiagnosisTest, IndependentGroundEffectFlightSelectsTheGroundEffectAlone) {
+  const auto dir = testing::SharedDataPath("independent-sim");
+  if (!dir) GTEST_SKIP() << "../shared/data/independent-sim is absent";
+  const std::string base = *dir + "/A_ground_effect";
+  const Vehicle vehicle = ReadVehicleYaml(base + ".yaml");
+  const FlightLog log = ReadFlightCsv(base + ".csv", vehicle.num_rotors());
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  DiagnosisOptions options;
+  options.identify = identify;
+  const EffectKind ground = ParseEffectKind("ground_effect");
+  options.candidates = {ground, ParseEffectKind("rotor_thrust_scale"), ParseEffectKind("imu_lever_arm")};
+  const Diagnosis d = Diagnose(ProcessFlights({{vehicle, log, 1.0}}, ObservationOptions{}), {}, options);
+  EXPECT_EQ(d.selected, std::vector<EffectKind>{ground}) << DiagnosisVerdict(d);
+  EXPECT_NEAR(VerdictOf(d, ground).value[0], 1.0, 0.03) << DiagnosisVerdict(d);
 }
 
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {
