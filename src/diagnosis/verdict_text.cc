@@ -259,7 +259,8 @@ std::string HowFarText(const Diagnosis& d) {
     // Each gap divides by its own model's rotor wrench, which an effect can change (per-rotor thrust
     // scales cancel a static moment that the baseline's first moment balanced): the residual itself
     // is the comparison that no divisor moves.
-    const Eigen::Matrix<double, 6, 1>& last = d.steps.empty() ? d.baseline.residual_rms : d.steps.back().after.residual_rms;
+    const Eigen::Matrix<double, 6, 1>& last =
+        d.steps.empty() ? d.baseline.residual_rms : d.steps.back().after.residual_rms;
     out << std::scientific << std::setprecision(2) << "; residual " << d.baseline.residual_rms[c];
     if (!d.steps.empty()) out << " -> " << last[c];
     out << (c < 3 ? " N" : " N m") << std::fixed << ")\n";

@@ -605,9 +605,9 @@ void SolveEffectProblem(const RefineOptions& options, bool start_pass, EffectPro
   result->solver.iterations = iterations;
   result->solver.final_cost = summary.final_cost;
   result->solver.termination = slow.stopped() ? "start pass: ended where its steps were slow"
-                                : summary.termination_type == ceres::USER_SUCCESS
-                                    ? "no convergence (iteration limit)"
-                                    : TerminationName(summary.termination_type);
+                               : summary.termination_type == ceres::USER_SUCCESS
+                                   ? "no convergence (iteration limit)"
+                                   : TerminationName(summary.termination_type);
   result->solver.message = summary.message;
   result->solver.full_report = summary.FullReport();
   if (!summary.IsSolutionUsable()) throw Error("refinement failed: " + summary.message);

@@ -104,7 +104,17 @@ TEST(EffectLinearizationTest, AStrideOfRowSamplesStandsForAllRows) {
   EXPECT_EQ(fit_thinned.effective_samples, fit_all.effective_samples);
 }
 
+// One flight's held-out residual as one segment, every component scored.
+HeldOutResidual OneScoredSegment(const Eigen::MatrixXd& residual, const Eigen::MatrixXd& rotor_wrench) {
+  HeldOutResidual out;
+  out.flight = {0};
+  out.segments = {{residual, rotor_wrench}};
+  out.scored = {{true, true, true, true, true, true}};
+  return out;
+}
+
 }  // namespace
+
 // A model whose yaw row shrinks as a whole (kd and I_zz scaled down together, as a linear fit does
 // when a delay spoils the yaw equation) has a smaller held-out Mz residual without fitting any
 // better: the score measures each residual against the model's own rotor wrench and gives it the
@@ -116,14 +126,7 @@ TEST(HeldOutScoreTest, ShrinkingARowGroupsScaleDoesNotPay) {
       residual(r, j) = std::sin(0.37 * r + j) * (1.0 + 0.1 * j);
       wrench(r, j) = j < 2 ? 0.0 : 5.0 * std::cos(0.11 * r + 2 * j);
     }
-  const auto held_out = [](const Eigen::MatrixXd& e, const Eigen::MatrixXd& w) {
-    HeldOutResidual out;
-    out.flight = {0};
-    out.segments = {{e, w}};
-    out.scored = {{true, true, true, true, true, true}};
-    return out;
-  };
-  const HeldOutResidual baseline = held_out(residual, wrench);
+  const HeldOutResidual baseline = OneScoredSegment(residual, wrench);
   const HeldOutScales scales = BaselineScales(baseline, 1);
   const ComponentVector noise = ComponentVector::Zero();
   const HeldOutGap base = ScoreHeldOut(baseline, scales, noise);
@@ -132,13 +135,13 @@ TEST(HeldOutScoreTest, ShrinkingARowGroupsScaleDoesNotPay) {
   Eigen::MatrixXd shrunk_residual = residual, shrunk_wrench = wrench;
   shrunk_residual.col(5) *= 0.2;
   shrunk_wrench.col(5) *= 0.2;
-  const HeldOutResidual shrunk = held_out(shrunk_residual, shrunk_wrench);
+  const HeldOutResidual shrunk = OneScoredSegment(shrunk_residual, shrunk_wrench);
   EXPECT_NEAR(ScoreHeldOut(shrunk, scales, noise).whitened_ssr, base.whitened_ssr, 1e-9);
   EXPECT_NEAR(CompareHeldOut(baseline, shrunk, scales).mean_difference, 0.0, 1e-12);
 
   Eigen::MatrixXd better_residual = residual;
   better_residual.col(5) *= 0.5;
-  const HeldOutResidual better = held_out(better_residual, wrench);
+  const HeldOutResidual better = OneScoredSegment(better_residual, wrench);
   EXPECT_NEAR(ScoreHeldOut(better, scales, noise).whitened_ssr, base.whitened_ssr - 0.75 * 400, 1e-9);
   EXPECT_LT(CompareHeldOut(baseline, better, scales).mean_difference, -0.7);
 }
@@ -158,14 +161,7 @@ TEST(HeldOutScoreTest, AStaticMomentThatAFirstMomentBalancesDoesNotPay) {
       residual(r, j) = 0.002 * std::sin(0.37 * r + j);
       wrench(r, j) = j < 2 ? 0.0 : -0.0196 + 0.0452 * std::cos(0.11 * r + 2 * j);  // std 0.032
     }
-  const auto held_out = [](const Eigen::MatrixXd& e, const Eigen::MatrixXd& w) {
-    HeldOutResidual out;
-    out.flight = {0};
-    out.segments = {{e, w}};
-    out.scored = {{true, true, true, true, true, true}};
-    return out;
-  };
-  const HeldOutResidual baseline = held_out(residual, wrench);
+  const HeldOutResidual baseline = OneScoredSegment(residual, wrench);
   const HeldOutScales scales = BaselineScales(baseline, 1);
   const ComponentVector noise = ComponentVector::Zero();
   const double base_ssr = ScoreHeldOut(baseline, scales, noise).whitened_ssr;
@@ -177,13 +173,13 @@ TEST(HeldOutScoreTest, AStaticMomentThatAFirstMomentBalancesDoesNotPay) {
   const double inflated_rms = std::sqrt(inflated.col(3).squaredNorm() / rows);
   const double wrench_rms = std::sqrt(wrench.col(3).squaredNorm() / rows);
   ASSERT_GT(inflated_rms / wrench_rms, 1.15);
-  const HeldOutResidual same_residual = held_out(residual, inflated);
+  const HeldOutResidual same_residual = OneScoredSegment(residual, inflated);
   EXPECT_NEAR(ScoreHeldOut(same_residual, scales, noise).whitened_ssr, base_ssr, 1e-9);
   EXPECT_NEAR(CompareHeldOut(baseline, same_residual, scales).mean_difference, 0.0, 1e-12);
 
   Eigen::MatrixXd more_thrust = wrench;
   more_thrust.col(2).array() -= 0.0103;
-  const double fz_ssr = ScoreHeldOut(held_out(residual, more_thrust), scales, noise).whitened_ssr;
+  const double fz_ssr = ScoreHeldOut(OneScoredSegment(residual, more_thrust), scales, noise).whitened_ssr;
   EXPECT_LT(fz_ssr, base_ssr - 0.1 * rows);
 }
 
