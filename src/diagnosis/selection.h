@@ -107,6 +107,8 @@ struct TestedCandidate {
   // (EffectDescriptor::Negligible). Either way never selected, not tested again.
   std::string implausible;
   std::string negligible;
+  // A kept timing effect refitted at half the low-pass cut-off, where it held: both values.
+  std::string held_at_half_cutoff;
   bool Rejected() const { return !implausible.empty() || !negligible.empty(); }
   // Sets `implausible` (outside the physical range, or `on_bound`: a bound of its refinement clipped
   // it) or else `negligible` (below the size that matters) for this estimate; returns Rejected().

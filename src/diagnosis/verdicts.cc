@@ -141,6 +141,7 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
     v.implausible = t->second.implausible;
     v.negligible = t->second.negligible;
   }
+  if (tested && v.selected) v.held_at_half_cutoff = t->second.held_at_half_cutoff;
   ApplyKeptStep(outcome.steps, &v);
   ApplyDropped(context, outcome.backward.dropped, &v);
   if (!v.selected) v.unscored = UnscoredStatement(outcome.linearization, kind);

@@ -234,6 +234,34 @@ ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, doub
   return out;
 }
 
+ProcessedFlight LowPassFurther(const ProcessedFlight& flight, const ButterworthOptions& extra, DataSource source) {
+  const double fs = 1.0 / flight.dt_s;
+  if (const std::string problem = extra.Validate(fs); !problem.empty()) throw Error(flight.source + ": " + problem);
+  const SosFilter more = DesignButterworth(extra, fs);
+  ProcessedFlight out = flight;
+  out.filter.sections.insert(out.filter.sections.end(), more.sections.begin(), more.sections.end());
+  // Filtering commutes with the (linear) central differences: filtering w' again is differentiating
+  // the twice-filtered w.
+  out.angular_velocity = FiltFiltColumns(more, flight.angular_velocity);
+  out.angular_acceleration = FiltFiltColumns(more, flight.angular_acceleration);
+  out.specific_force = FiltFiltColumns(more, flight.specific_force);
+  out.rotor = FilteredRotorSpeed(more, flight.rotor.array().square().matrix());
+  if (flight.voltage_v) out.voltage_v = FiltFiltColumns(more, *flight.voltage_v).col(0);
+  if (flight.velocity_mps) out.velocity_mps = FiltFiltColumns(more, *flight.velocity_mps);
+  if (flight.height_m) out.height_m = FiltFiltColumns(more, *flight.height_m).col(0);
+  if (flight.rotor_height_m) out.rotor_height_m = FiltFiltColumns(more, *flight.rotor_height_m);
+  // Noise std scales by the ratio of the cascade's gain to the first filter's, per derivative order.
+  auto ratio = [&](int differentiations) {
+    const double before = NoiseVarianceGain(flight.filter, fs, differentiations);
+    return before > 0.0 ? std::sqrt(NoiseVarianceGain(out.filter, fs, differentiations) / before) : 1.0;
+  };
+  const bool imu = source == DataSource::kImu;
+  out.noise.angular_velocity *= ratio(imu ? 0 : 1);
+  out.noise.angular_acceleration *= ratio(imu ? 1 : 2);
+  out.noise.specific_force *= ratio(imu ? 0 : 2);
+  return out;
+}
+
 FlightInputs ProcessedFlight::inputs() const {
   FlightInputs available;
   available.velocity = velocity_mps.has_value();

@@ -55,6 +55,7 @@ const EffectDescriptor& DelayEffect() {
     i.lower_bound = -0.1;
     i.upper_bound = 0.2;
     i.grid_searched = true;
+    i.checked_at_half_cutoff = true;
     i.draw = {DrawShape::kUniform, 0.005, 0.040};
     i.simulator_limit = {true, 0.0, 0.05};
     // A rotor speed measured through a filter can be logged up to ~30 ms after it acts; ESC latency and a

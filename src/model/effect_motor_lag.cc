@@ -57,6 +57,7 @@ const EffectDescriptor& MotorLagEffect() {
     i.lower_bound = 0.0;
     i.upper_bound = 0.3;
     i.screening_grid = {0.01, 0.02, 0.04, 0.08, 0.15, 0.3};
+    i.checked_at_half_cutoff = true;
     i.draw = {DrawShape::kUniform, 0.020, 0.060};
     i.simulator_limit = {true, 0.0, 0.08};
     // Motor and propeller time constants: 10-30 ms small brushless, 20-60 ms brushed (the Crazyflie's

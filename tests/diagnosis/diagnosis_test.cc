@@ -345,6 +345,40 @@ TEST(DiagnosisTest, IndependentGroundEffectFlightSelectsTheGroundEffectAlone) {
   EXPECT_NEAR(VerdictOf(d, ground).value[0], 1.0, 0.03) << DiagnosisVerdict(d);
 }
 
+// The controller's reply to gyro noise makes the rotor signal follow the noise of w' above the
+// pilot's band (0.15-2.5 Hz, scaled down near the ground): on a clean take-off-and-landing flight of A
+// a delay reads 1.06 +- 0.13 ms at the 10 Hz cut-off (12 ms at 20 Hz), removed 1.2 % of the held-out
+// residual and was selected; at 5 Hz it reads 0.14 +- 0.07 ms. A true 10 ms delay on the same flight
+// holds there (11.0 ms at 10 Hz, 10.2 at 5 Hz) and stays selected.
+TEST(DiagnosisTest, DelayThatTheControllersReplyToNoiseFakesIsImplausible) {
+  const EffectKind delay = ParseEffectKind("delay");
+  auto diagnose = [&](double delay_s) {
+    const SimulationVehicle preset = PresetVehicle("A");
+    SimulationOptions sim;
+    sim.duration_s = 60.0;
+    sim.seed = 2;
+    sim.profile = FlightProfile::kTakeoffLanding;
+    sim.effects.Set(delay, delay_s);
+    const SimulationResult flight = Simulate(preset.vehicle, preset.parameters, sim);
+    DiagnosisOptions options;
+    options.candidates = {delay, ParseEffectKind("motor_lag")};
+    return Diagnose(ProcessFlights({{flight.vehicle, flight.log, 1.0}}, ObservationOptions{}), {}, options);
+  };
+  const Diagnosis clean = diagnose(0.0);
+  EXPECT_TRUE(clean.selected.empty()) << DiagnosisVerdict(clean);
+  const EffectVerdict& faked = VerdictOf(clean, delay);
+  EXPECT_EQ(faked.status, "implausible") << faked.note;
+  EXPECT_NE(faked.implausible.find("at the 10 Hz cut-off"), std::string::npos) << faked.implausible;
+  EXPECT_NE(faked.implausible.find("at 5 Hz"), std::string::npos) << faked.implausible;
+
+  const Diagnosis delayed = diagnose(0.010);
+  ASSERT_FALSE(delayed.selected.empty()) << DiagnosisVerdict(delayed);
+  EXPECT_EQ(delayed.selected.front(), delay) << DiagnosisVerdict(delayed);
+  EXPECT_NEAR(VerdictOf(delayed, delay).value[0], 0.010, 1.5e-3) << DiagnosisVerdict(delayed);
+  EXPECT_NE(VerdictOf(delayed, delay).note.find("holds at half the low-pass cut-off"), std::string::npos)
+      << VerdictOf(delayed, delay).note;
+}
+
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 23, Effects{})}, {}, TestOptions());
   EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);

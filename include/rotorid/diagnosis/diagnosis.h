@@ -166,6 +166,9 @@ struct EffectVerdict {
   std::string implausible;
   // Status "negligible": which value lies below which size, and why that size (also in `note`).
   std::string negligible;
+  // Selected delay or motor lag: its value refitted at half the low-pass cut-off, where a true one
+  // holds and one the controller's reply to sensor noise fakes vanishes (also in `note`).
+  std::string held_at_half_cutoff;
   // Not selected, and most of its signature falls in a component no test scores (Mz when the linear
   // identification discarded kd): why this data cannot rule it out (also in `note`).
   std::string unscored;

@@ -98,6 +98,13 @@ inline constexpr double kMaxGapIntervals = 10.0;
 ProcessedFlight ProcessFlight(const FlightLog& log, const Vehicle& vehicle, double weight,
                               const ObservationOptions& options);
 
+// The flight as if processed with `extra` (a low-pass) after the filter it went through: every
+// filtered signal (rotor speeds through their squares) filtered again, the cascade kept in `filter`
+// for the effects that re-filter the raw rotor signal, the noise levels scaled by the cascade's gain
+// (`source`: how the flight was processed, which sets the derivative order of each signal). The row
+// samples stay. The diagnosis re-fits timing effects at half the cut-off with it.
+ProcessedFlight LowPassFurther(const ProcessedFlight& flight, const ButterworthOptions& extra, DataSource source);
+
 // The IDIM rows of one flight: 6 rows per row sample (sample-major, components Fx Fy Fz Mx My Mz),
 // columns [kt kd chi(9) m] as IdimRows.
 Eigen::MatrixXd BuildIdimMatrix(const ProcessedFlight& flight);
