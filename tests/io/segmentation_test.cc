@@ -253,15 +253,7 @@ TEST(SegmentationRealData, ArplFlights) {
 TEST(SegmentationRealData, NanobenchFlightsWithSaturatedMotors) {
   const auto dir = testing::SharedDataPath("real/nanobench-cf21");
   if (!dir) GTEST_SKIP() << "shared NanoBench data not present";
-  const ColumnMap map = ParseColumnMap(R"(time: {column: t, unit: s}
-gyro: {columns: [imu_gyro_x, imu_gyro_y, imu_gyro_z], unit: rad/s}
-acc: {columns: [imu_acc_x, imu_acc_y, imu_acc_z], unit: g}
-rotors: {columns: [motor_motor_m1, motor_motor_m2, motor_motor_m3, motor_motor_m4], unit: pwm}
-position: {columns: [px, py, pz], unit: m}
-quaternion: {columns: [qw, qx, qy, qz]}
-voltage: {column: pwr_pm_vbat, unit: V}
-)",
-                                       "nanobench.yaml");
+  const ColumnMap map = ReadColumnMap(testing::SourceDir() + "/data/column_maps/nanobench_cf21.yaml");
   for (const std::string name : {"B2_circle_fast_rep2", "B3_figure8_fast_rep2", "B5_helix_fast_rep1",
                                  "B8_star_fast_rep1", "B10_lissajous_fast_rep1"}) {
     SCOPED_TRACE(name);
