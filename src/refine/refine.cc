@@ -815,6 +815,36 @@ bool SearchesDelayGrid(const RefineOptions& options) {
                                                     [](EffectKind kind) { return kind->info().grid_searched; });
 }
 
+// kt, kd and the inertia's diagonal: parameters whose physics fixes their sign (positive).
+bool PositiveByPhysics(const std::string& name) {
+  auto ends_with = [&](const std::string& suffix) {
+    return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  return name == "kt" || name == "kd" || ends_with(".I_xx") || ends_with(".I_yy") || ends_with(".I_zz");
+}
+
+// The TLS re-selected on the rows corrected by the effects, but with the parameters that the linear
+// step discarded and that come back with a sign their physics excludes (beyond 3 std) held
+// discarded, as the linear step had them; `held` names those. On a flight with little yaw the yaw
+// equation fixes kd / I_zz only, and the corrected rows can give both the wrong sign with a small
+// first-order std (the independent simulator's ground-effect flight: kd -1.9e-9 +- 0.14e-9 and
+// I_zz -0.0011, with their ratio right).
+TlsSolution ReselectEssential(const IdimSystem& corrected, const IdentificationResult& linear, std::string* held) {
+  TlsSolution reselected = SolveIdim(corrected, linear.options.tls);
+  if (!reselected.usable) return reselected;
+  TlsOptions holding = linear.options.tls;
+  for (int k = 0; k < corrected.num_parameters(); ++k) {
+    const std::string& name = corrected.parameter_names[k];
+    if (linear.solution.essential[k] || !reselected.essential[k] || !PositiveByPhysics(name) ||
+        reselected.chi[k] >= -3.0 * reselected.std[k])
+      continue;
+    holding.fixed_zero.push_back(name);
+    *held += (held->empty() ? "" : ", ") + name + " = " + ShortNumber(reselected.chi[k]) + " +- " +
+             ShortNumber(reselected.std[k]);
+  }
+  return holding.fixed_zero.size() == linear.options.tls.fixed_zero.size() ? reselected : SolveIdim(corrected, holding);
+}
+
 }  // namespace
 
 int RefineSteps(const RefineOptions& options) {
@@ -852,9 +882,11 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     // to their precision. Re-run the TLS, weights and selection included, on the rows corrected by
     // the estimated effects, and refine again from there, until the effects settle.
     Effects previous = result.effects;
+    std::string held;  // of the pass whose result stands
     for (int pass = 2; pass <= kMaxRefinePasses; ++pass) {
       IdimSystem corrected{linear.system, SystemRowsWithEffects(linear, result.effects)};
-      TlsSolution reselected = SolveIdim(corrected, linear.options.tls);
+      std::string pass_held;
+      TlsSolution reselected = ReselectEssential(corrected, linear, &pass_held);
       corrected.w = Eigen::MatrixXd();  // the pass needs its layout only; the rows are 100 MB on a 1 h log
       if (!reselected.usable) {
         // No reselected pass follows: the loosely solved first pass is the result, so finish it.
@@ -876,6 +908,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
                        /*start_pass=*/false);
       candidate.reselected = reselected;
       result = std::move(candidate);
+      held = pass_held;
       step_done();
       // Settled when no effect coordinate moved by more than a tenth of its std (without a
       // covariance: by more than the effect's settle tolerance).
@@ -892,6 +925,10 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       if (settled) break;
       previous = result.effects;
     }
+    if (!held.empty())
+      result.warnings.push_back("the re-selection on the rows corrected by the effects brought back " + held +
+                                ", which the linear step discarded, with a sign their physics excludes: held "
+                                "discarded, as in the linear step (these flights fix their ratios, not their scale)");
   }
   if (progress && steps_done < total_steps) progress(total_steps, total_steps);
   // Estimates on a bound are not estimates.
