@@ -817,10 +817,7 @@ bool SearchesDelayGrid(const RefineOptions& options) {
 
 // kt, kd and the inertia's diagonal: parameters whose physics fixes their sign (positive).
 bool PositiveByPhysics(const std::string& name) {
-  auto ends_with = [&](const std::string& suffix) {
-    return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-  };
-  return name == "kt" || name == "kd" || ends_with(".I_xx") || ends_with(".I_yy") || ends_with(".I_zz");
+  return name == "kt" || name == "kd" || EndsWith(name, ".I_xx") || EndsWith(name, ".I_yy") || EndsWith(name, ".I_zz");
 }
 
 // The TLS re-selected on the rows corrected by the effects, but with the parameters that the linear

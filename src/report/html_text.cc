@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "rotorid/core/text.h"
 #include "rotorid/model/parameters.h"
 
 namespace rotorid::internal {
@@ -61,10 +62,6 @@ std::string ComponentCells(const std::vector<std::optional<double>>& values, con
 }
 
 namespace {
-
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // "acc_bias_x" -> "acc_bias", "rotor_thrust_scale_3" -> "rotor_thrust_scale".
 std::string WithoutAxisSuffix(const std::string& name) {

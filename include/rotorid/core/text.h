@@ -13,5 +13,6 @@ std::string FormatValue(const char* printf_format, double value);
 inline std::string ShortNumber(double value) { return FormatValue("%.3g", value); }
 // "a, b, c".
 std::string Join(const std::vector<std::string>& parts, const char* separator = ", ");
+bool EndsWith(const std::string& text, const std::string& suffix);
 
 }  // namespace rotorid
