@@ -18,7 +18,8 @@ std::vector<Rival> FindRivals(const std::vector<ForwardStep>& steps, EffectMask 
       for (const auto& [other, other_test] : step.refined) {
         if (other == selection.added || Has(kept, other)) continue;
         if (!other_test.significant || other_test.shrink_pct < 0.5 * selection.test.shrink_pct) continue;
-        rivals.push_back({selection.added, other, before, selection.test, other_test});
+        rivals.push_back({selection.added, other, before, selection.test, other_test,
+                          other == step.timing_twin ? step.timing_separation : std::nullopt});
       }
     }
     before |= Bit(selection.added);
@@ -59,6 +60,16 @@ ConfoundedEffects CompareRival(const Rival& rival, const ModelRecord& with_selec
   std::ostringstream note;
   note << std::fixed << std::setprecision(1) << other << " alone removes " << c.other_shrink_pct
        << " % of the held-out residual, " << selected << " " << c.selected_shrink_pct << " %";
+  const std::optional<TimingSeparation>& separation = rival.separation;
+  if (separation && separation->decided == c.selected) {
+    c.distinguishable = true;
+    note << "; the held-out rows cannot tell them apart (t = " << std::setprecision(1) << c.t_statistic
+         << "), but refined together at half the low-pass cut-off (" << separation->cutoff_hz
+         << " Hz), below the controller's reply to sensor noise, " << separation->values << ": " << selected
+         << " carries the timing, the data tell them apart";
+    c.note = note.str();
+    return c;
+  }
   if (c.distinguishable)
     note << "; " << selected << " fits the held-out rows significantly better (t = " << std::setprecision(1)
          << c.t_statistic << "): the data tell them apart";
@@ -71,6 +82,9 @@ ConfoundedEffects CompareRival(const Rival& rival, const ModelRecord& with_selec
     note << "; the difference is not significant (t = " << std::setprecision(1) << c.t_statistic
          << "): these flights cannot tell " << selected << " and " << other << " apart"
          << AloneValues(c.selected, with_selected, c.other, with_other);
+  if (separation)
+    note << "; refined together at half the low-pass cut-off (" << std::setprecision(1) << separation->cutoff_hz
+         << " Hz), " << separation->values << ": both carry a share (a mix of the two, or neither pure)";
   c.note = note.str();
   return c;
 }

@@ -6,6 +6,7 @@
 // data cannot tell them apart.
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "diagnosis/linearization.h"
@@ -13,9 +14,6 @@
 #include "rotorid/diagnosis/diagnosis.h"
 
 namespace rotorid::internal {
-
-// Held-out shrinks closer than this fraction of the larger one are the same fit in practice.
-inline constexpr double kPracticalEquivalence = 0.1;
 
 // A rival of a kept effect: refined at the forward step that selected it (on top of `base`),
 // significant, and with at least half its held-out shrink.
@@ -25,6 +23,7 @@ struct Rival {
   EffectMask base = 0;
   EffectTest selected_test;
   EffectTest other_test;
+  std::optional<TimingSeparation> separation;  // a timing twin's joint fit at half the cut-off
 };
 
 // The rivals of the effects in `kept`, step by step in candidate order. Rivals that are kept
@@ -33,7 +32,8 @@ std::vector<Rival> FindRivals(const std::vector<ForwardStep>& steps, EffectMask 
 
 // Paired comparison of the two models' held-out residuals (CompareHeldOut with these scales):
 // distinguishable when significant at `alpha` and the shrinks are not practically equal; the note
-// says which, and for two scalar effects what each fits alone.
+// says which, and for two scalar effects what each fits alone. A timing twin that the joint fit at
+// half the cut-off separated from the selected one is distinguishable, whatever the held-out rows say.
 ConfoundedEffects CompareRival(const Rival& rival, const ModelRecord& with_selected, const ModelRecord& with_other,
                                const HeldOutScales& scales, double alpha);
 

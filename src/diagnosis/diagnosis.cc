@@ -276,6 +276,64 @@ RefineResult RefineOnAllData(const IdentificationResult& full, const std::vector
   return Refine(full, refine);
 }
 
+ButterworthOptions HalfCutoff(const DiagnosisOptions& options) {
+  const ButterworthOptions& filter = options.identify.observation.filter;
+  return {filter.order, FilterBand::kLowPass, 0.5 * filter.cutoff_hz, 0.0};
+}
+
+// RefineOnAllData on the flights low-passed further, to half the cut-off.
+RefineResult RefineAtHalfCutoff(const IdentificationResult& full, const std::vector<EffectKind>& effects,
+                                const Effects& initial, const DiagnosisOptions& options) {
+  std::vector<ProcessedFlight> flights;
+  for (const ProcessedFlight& flight : full.flights)
+    flights.push_back(LowPassFurther(flight, HalfCutoff(options), options.identify.observation.source));
+  return RefineOnAllData(IdentifyProcessed(std::move(flights), options.identify), effects, initial, options);
+}
+
+// A kept timing effect and its twin (ForwardStep::timing_twin) refined together with the other kept
+// effects at half the cut-off (internal::TimingSeparation), each started at half the kept one's value:
+// the fit then slides along the line of their sum to where their shapes fit. Nullopt, with a
+// warning, when it fails.
+std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(const IdentificationResult& full,
+                                                                     internal::SelectionContext* context,
+                                                                     const std::vector<EffectKind>& kept,
+                                                                     const Effects& final_effects, EffectKind selected,
+                                                                     EffectKind other) {
+  Effects initial = final_effects;
+  const Eigen::VectorXd half_value = 0.5 * final_effects.Get(selected);
+  initial.Set(selected, half_value);
+  initial.Set(other, half_value);
+  std::vector<EffectKind> model = kept;
+  model.push_back(other);
+  RefineResult joint;
+  try {
+    joint = RefineAtHalfCutoff(full, model, initial, context->options);
+  } catch (const Error& e) {
+    context->warnings.push_back(std::string(EffectName(selected)) + " and " + EffectName(other) +
+                                " were not refined together at half the cut-off (" + e.what() + ")");
+    return std::nullopt;
+  }
+  internal::TimingSeparation separation;
+  separation.cutoff_hz = HalfCutoff(context->options).cutoff_hz;
+  separation.values = std::string(EffectName(selected)) + " = " +
+                      selected->Format(joint.effects.Get(selected), joint.effects_std.Get(selected)) + ", " +
+                      EffectName(other) + " = " + other->Format(joint.effects.Get(other), joint.effects_std.Get(other));
+  if (joint.effects_std.Get(selected).size() != 1 || joint.effects_std.Get(other).size() != 1) return separation;
+  // Timing effects are scalars in seconds: their values add up to the delay the two share.
+  const double a = joint.effects.Scalar(selected), b = joint.effects.Scalar(other);
+  const double sa = joint.effects_std.Scalar(selected), sb = joint.effects_std.Scalar(other);
+  // Near tau = 0 a lag is a delay to first order: a pure delay's joint fit has a std of 1-3 ms and can
+  // lean a quarter of it into the lag (a 5 ms delay: 1.2 +- 1.1 + 3.8 +- 1.1 ms), so the other one
+  // must be both insignificant and small.
+  auto carries = [](double value, double std_dev, double rival, double rival_std) {
+    return std::abs(value) >= 3.0 * std_dev && std::abs(rival) < 3.0 * rival_std &&
+           std::abs(rival) < 0.1 * (std::abs(value) + std::abs(rival));
+  };
+  if (carries(a, sa, b, sb)) separation.decided = selected;
+  if (carries(b, sb, a, sa)) separation.decided = other;
+  return separation;
+}
+
 // The first kept timing effect (EffectDescriptor::Info::checked_at_half_cutoff) that does not hold
 // at half the low-pass cut-off, marked implausible in `tested`; nullopt when all hold (each then
 // carries both values in `held_at_half_cutoff`, for its verdict). The kept model
@@ -294,15 +352,10 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(const Identificatio
     if (kind->info().checked_at_half_cutoff) checked.push_back(kind);
   if (checked.empty()) return std::nullopt;
   const ObservationOptions& observation = context->options.identify.observation;
-  const ButterworthOptions half{observation.filter.order, FilterBand::kLowPass, 0.5 * observation.filter.cutoff_hz,
-                                0.0};
+  const ButterworthOptions half = HalfCutoff(context->options);
   RefineResult at_half;
   try {
-    std::vector<ProcessedFlight> flights;
-    for (const ProcessedFlight& flight : full.flights)
-      flights.push_back(LowPassFurther(flight, half, observation.source));
-    at_half = RefineOnAllData(IdentifyProcessed(std::move(flights), context->options.identify), kept, at_cutoff.effects,
-                              context->options);
+    at_half = RefineAtHalfCutoff(full, kept, at_cutoff.effects, context->options);
   } catch (const Error& e) {
     context->warnings.push_back("the timing effects were not checked at half the cut-off (" + std::string(e.what()) +
                                 ")");
@@ -329,6 +382,27 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(const Identificatio
   return std::nullopt;
 }
 
+// Separates each kept timing effect from its twin not separated yet (SeparateTimingAtHalfCutoff) and,
+// where the data at half the cut-off decide for the twin, puts it in the kept one's place, in `kept`
+// and in the forward step that added it; true when it did (the final model is then refined again).
+bool SeparatedTimingTwin(const IdentificationResult& full, const Effects& final_effects,
+                         internal::SelectionContext* context, std::vector<EffectKind>* kept,
+                         internal::ForwardSelection* forward) {
+  for (internal::ForwardStep& step : forward->steps) {
+    const EffectKind added = step.selection.added;
+    const auto in_kept = std::find(kept->begin(), kept->end(), added);
+    if (!step.timing_twin || step.timing_separation || in_kept == kept->end()) continue;
+    if (std::find(kept->begin(), kept->end(), step.timing_twin) != kept->end()) continue;
+    step.timing_separation = SeparateTimingAtHalfCutoff(full, context, *kept, final_effects, added, step.timing_twin);
+    if (!step.timing_separation || step.timing_separation->decided != step.timing_twin) continue;
+    *in_kept = step.timing_twin;
+    std::replace(forward->selected.begin(), forward->selected.end(), added, step.timing_twin);
+    internal::SwapTimingTwin(*context, *step.timing_separation, &step);
+    return true;
+  }
+  return false;
+}
+
 // The final model on all identification data and the criterion linearised there (std, detectable
 // sizes). A kept effect whose final value lies outside its physical range or on a bound of its
 // refinement (or below the size that matters) is marked implausible (negligible) in `tested` and
@@ -343,7 +417,8 @@ struct FinalModel {
   internal::EffectSubsetFit kept_fit;
 };
 FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::SelectionContext* context,
-                         std::vector<EffectKind>* kept, internal::TestedCandidates* tested) {
+                         std::vector<EffectKind>* kept, internal::ForwardSelection* forward) {
+  internal::TestedCandidates* tested = &forward->tested;
   for (EffectMask previous = internal::MaskOf(*kept);;) {
     FinalModel model;
     model.parameters = all_data.parameters;
@@ -383,9 +458,12 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
       continue;
     }
     const std::optional<EffectKind> faked =
-        TimingEffectNotHoldingAtHalfCutoff(all_data.linear, KindsOf(mask), result, context, tested);
-    if (!faked) return model;
-    kept->erase(std::find(kept->begin(), kept->end(), *faked));
+        TimingEffectNotHoldingAtHalfCutoff(all_data.linear, KindsOf(mask), result, context, &forward->tested);
+    if (faked) {
+      kept->erase(std::find(kept->begin(), kept->end(), *faked));
+      continue;
+    }
+    if (!SeparatedTimingTwin(all_data.linear, result.effects, context, kept, forward)) return model;
   }
 }
 
@@ -437,7 +515,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
 
   // The final model on all identification data, without kept effects that run off there; std and
   // detectable sizes from the criterion linearised at it.
-  const FinalModel final_model = FitFinalModel(all_data, &context, &backward.kept, &forward.tested);
+  const FinalModel final_model = FitFinalModel(all_data, &context, &backward.kept, &forward);
   const internal::EffectLinearization& linearization = final_model.linearization;
   const internal::EffectSubsetFit& kept_fit = final_model.kept_fit;
   diagnosis.final_effects = final_model.effects;

@@ -1,6 +1,7 @@
 #include "diagnosis/selection.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "diagnosis/verdict_text.h"
 #include "refine/grid_search.h"
@@ -275,6 +276,20 @@ EffectKind FitAndJudge(SelectionContext* context, const AllDataModel& all_data, 
   return best < 0 ? nullptr : to_fit[best];
 }
 
+// A timing effect that removed practically the same held-out residual as `best` at this step (a
+// delay and a motor lag) is its twin: the final model decides between them at half the cut-off.
+void NoteTimingTwin(EffectKind best, const TestedCandidates& tested, ForwardStep* step) {
+  if (!best->info().checked_at_half_cutoff) return;
+  const double best_shrink = tested.at(best).test.shrink_pct;
+  for (const auto& [other, test] : step->refined) {
+    if (other == best || !other->info().checked_at_half_cutoff || !test.significant) continue;
+    if (std::abs(best_shrink - test.shrink_pct) < kPracticalEquivalence * std::max(best_shrink, test.shrink_pct)) {
+      step->timing_twin = other;
+      return;
+    }
+  }
+}
+
 }  // namespace
 
 ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& all_data, PhaseTimer* timer) {
@@ -305,7 +320,9 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
       to_fit = CandidatesWorthRefining(remaining, forward.tested, options);
     }
     if (!best_kind) break;
+    NoteTimingTwin(best_kind, forward.tested, &added);
     const EffectTest best_test = forward.tested[best_kind].test;
+    added.base = selected;
     added.selection.added = best_kind;
     added.selection.before = context->records.at(selected).gap;
     selected |= Bit(best_kind);
@@ -315,6 +332,18 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
     forward.selected.push_back(best_kind);
   }
   return forward;
+}
+
+void SwapTimingTwin(const SelectionContext& context, const TimingSeparation& separation, ForwardStep* step) {
+  SelectionStep& selection = step->selection;
+  const EffectKind twin = step->timing_twin;
+  const auto refined = std::find_if(step->refined.begin(), step->refined.end(),
+                                    [twin](const std::pair<EffectKind, EffectTest>& r) { return r.first == twin; });
+  step->timing_twin = selection.added;
+  step->timing_separation = separation;
+  selection.added = twin;
+  selection.after = context.records.at(step->base | Bit(twin)).gap;
+  selection.test = refined->second;
 }
 
 BackwardElimination EliminateBackward(SelectionContext* context, const std::vector<EffectKind>& selected) {

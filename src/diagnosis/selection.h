@@ -22,6 +22,9 @@
 
 namespace rotorid::internal {
 
+// Held-out shrinks closer than this fraction of the larger one are the same fit in practice.
+inline constexpr double kPracticalEquivalence = 0.1;
+
 // A set of effects, one bit per registry index (EffectDescriptor::index).
 using EffectMask = unsigned;
 EffectMask Bit(EffectKind kind);
@@ -53,6 +56,20 @@ class ModelFitter {
   virtual ~ModelFitter() = default;
   virtual std::vector<ModelRecord> Fit(const std::vector<EffectMask>& masks,
                                        const std::vector<std::vector<Effects>>& initial) = 0;
+};
+
+// Two timing effects (EffectDescriptor::Info::checked_at_half_cutoff: a delay and a motor lag) that
+// removed practically the same held-out residual, refined together with the final model's other
+// effects on the flights low-passed to half the cut-off. Between the two cut-offs the rotor signal
+// of a closed-loop flight follows the controller's reply to sensor noise, which blurs a lag's shape
+// into a delay's (a simulated 20 ms lag refined together with a delay: 16.8 + 3.1 ms at 10 Hz,
+// 20.1 + -0.1 ms at 5 Hz); below it the two separate.
+struct TimingSeparation {
+  // The one the joint fit keeps: significant (3 std), while the other is neither significant nor
+  // more than a tenth of the two's sum. Null: both carry a share (a mix of the two, or neither pure).
+  EffectKind decided = nullptr;
+  std::string values;  // "delay = 0.52 +- 0.19 ms, motor_lag = 19.5 +- 0.2 ms"
+  double cutoff_hz = 0.0;
 };
 
 // What the selection steps share: the options (candidates: the available ones), the models refined
@@ -138,9 +155,18 @@ std::vector<EffectKind> CandidatesWorthRefining(const std::vector<EffectKind>& r
 // A forward step that added an effect: the step, and every candidate refined in the folds at that
 // step (the added one included, in candidate order) with its test on top of the same base.
 struct ForwardStep {
+  EffectMask base = 0;  // the effects selected before it
   SelectionStep selection;
   std::vector<std::pair<EffectKind, EffectTest>> refined;
+  // A timing effect tied with the added one on the held-out rows, and what the final model's joint
+  // fit at half the cut-off made of the two (SwapTimingTwin: it may have put the twin in its place).
+  EffectKind timing_twin = nullptr;
+  std::optional<TimingSeparation> timing_separation;
 };
+
+// Puts the step's timing twin in place of the added effect (refined on the same base at that step),
+// with `separation`, which decided for it.
+void SwapTimingTwin(const SelectionContext& context, const TimingSeparation& separation, ForwardStep* step);
 
 struct ForwardSelection {
   std::vector<EffectKind> selected;  // in the order added
@@ -151,7 +177,8 @@ struct ForwardSelection {
 
 // Forward selection: at each step the screened candidates are refined on top of the effects
 // selected so far; the one with the smallest held-out residual among those whose fold-mean value is
-// physically plausible is kept while its F-test is significant, up to options.max_effects. A
+// physically plausible is kept while its F-test is significant, up to options.max_effects. A timing
+// effect that ties with the added one is noted as its twin (ForwardStep::timing_twin). A
 // significant candidate with an implausible or negligible value is marked (TestedCandidate::implausible,
 // ::negligible) and left out of the later steps.
 ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& all_data, PhaseTimer* timer);

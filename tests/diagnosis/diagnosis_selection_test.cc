@@ -242,7 +242,7 @@ struct RivalFixture {
     }
   }
   Rival RivalWithShrinks(double delay_pct, double lag_pct) const {
-    return {kDelay, kMotorLag, 0, Significant(delay_pct), Significant(lag_pct)};
+    return {kDelay, kMotorLag, 0, Significant(delay_pct), Significant(lag_pct), std::nullopt};
   }
   ModelRecord with_delay, with_lag;
   // Unit residual RMS, no rotor wrench: the residuals enter the comparison as they are.
@@ -289,6 +289,30 @@ TEST(ConfoundingTest, SignificantAndPracticallyDifferentShrinksTellThemApart) {
   EXPECT_GT(reversed.p_value, 0.5);
   EXPECT_FALSE(reversed.distinguishable);
   EXPECT_NE(reversed.note.find("; the difference is not significant (t = -"), std::string::npos) << reversed.note;
+}
+
+TEST(ConfoundingTest, TwinsTheJointFitAtHalfTheCutoffSeparatesAreDistinguishable) {
+  const RivalFixture f;
+  Rival rival = f.RivalWithShrinks(20.0, 18.5);  // practically equal on the held-out rows
+  rival.separation = TimingSeparation{kDelay, "delay = 10 +- 0.2 ms, motor_lag = 0.1 +- 0.2 ms", 5.0};
+  const ConfoundedEffects separated = CompareRival(rival, f.with_delay, f.with_lag, f.scales, f.alpha);
+  EXPECT_TRUE(separated.distinguishable);
+  EXPECT_NE(separated.note.find("; the held-out rows cannot tell them apart (t = "), std::string::npos)
+      << separated.note;
+  EXPECT_NE(separated.note.find("refined together at half the low-pass cut-off (5.0 Hz), below the controller's "
+                                "reply to sensor noise, delay = 10 +- 0.2 ms, motor_lag = 0.1 +- 0.2 ms: delay "
+                                "carries the timing"),
+            std::string::npos)
+      << separated.note;
+
+  // Both keep a share: still confounded, with the joint values.
+  rival.separation->decided = nullptr;
+  const ConfoundedEffects mixed = CompareRival(rival, f.with_delay, f.with_lag, f.scales, f.alpha);
+  EXPECT_FALSE(mixed.distinguishable);
+  EXPECT_NE(mixed.note.find("these flights cannot tell delay and motor_lag apart"), std::string::npos) << mixed.note;
+  EXPECT_NE(mixed.note.find("(5.0 Hz), delay = 10 +- 0.2 ms, motor_lag = 0.1 +- 0.2 ms: both carry a share"),
+            std::string::npos)
+      << mixed.note;
 }
 
 TEST(ConfoundingTest, LargestCorrelationIsBetweenTheTwoEffectsOnly) {
