@@ -89,6 +89,8 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   for (EffectKind kind : kinds) effects.Set(kind, given.Get(kind, flights.front().vehicle));
   EffectLinearization out;
   out.kinds = kinds;
+  const bool kd_free = std::find(free_parameters.begin(), free_parameters.end(), "kd") != free_parameters.end();
+  for (EffectKind kind : kinds) out.held_directions.push_back(HeldDirections(kind, flights.front().vehicle, kd_free));
   for (size_t k = 0; k < kinds.size(); ++k)
     for (const std::string& label : EffectLabels(kinds[k], flights.front().vehicle)) {
       out.labels.push_back(label);
@@ -245,6 +247,13 @@ EffectSubsetFit FitEffectSubset(const EffectLinearization& linearization, const 
     if (kind->info().zero_sum) projector.block(p + c, p + c, end - c, end - c).array() -= 1.0 / (end - c);
     for (int k : kind->info().held_coordinates)
       if (c + k < end) projector(p + c + k, p + c + k) = 0.0;
+    // A held direction (centred, so orthogonal to the zero-sum one) is projected out as well.
+    const size_t k = static_cast<size_t>(std::find(linearization.kinds.begin(), linearization.kinds.end(), kind) -
+                                         linearization.kinds.begin());
+    if (k < linearization.held_directions.size() && linearization.held_directions[k].rows() == end - c) {
+      const Eigen::MatrixXd& held = linearization.held_directions[k];
+      projector.block(p + c, p + c, end - c, end - c) -= held * held.transpose();
+    }
     c = end;
   }
   const Eigen::MatrixXd gram = projector * linearization.gram(all, all) * projector;

@@ -43,6 +43,7 @@ struct EffectLinearization {
   std::vector<EffectKind> kinds;       // effect blocks in column order
   std::vector<std::string> labels;     // one per effect column
   std::vector<int> column_kind;        // index into kinds, per effect column
+  std::vector<Eigen::MatrixXd> held_directions;  // per kind (HeldDirections), held as the refinement holds them
   Eigen::VectorXd residual;            // scaled rho, all rows of all flights (sample-major, 6 per sample)
   Eigen::MatrixXd parameter_jacobian;  // scaled d rho / d chi, free parameters
   Eigen::MatrixXd effect_jacobian;     // scaled d rho / d effect parameters

@@ -288,6 +288,18 @@ Effects KnownEffects(const Vehicle& vehicle) {
   return known;
 }
 
+Eigen::MatrixXd HeldDirections(EffectKind kind, const Vehicle& vehicle, bool kd_free) {
+  const int dimension = kind->Dimension(vehicle);
+  if (kd_free || !kind->info().spin_pattern_needs_kd || dimension != vehicle.num_rotors()) {
+    return Eigen::MatrixXd(dimension, 0);
+  }
+  Eigen::VectorXd spin(dimension);
+  for (int i = 0; i < dimension; ++i) spin[i] = vehicle.rotors[static_cast<size_t>(i)].spin;
+  spin.array() -= spin.mean();
+  if (spin.norm() == 0.0) return Eigen::MatrixXd(dimension, 0);  // every rotor turning one way
+  return spin.normalized();
+}
+
 int EffectDimension(EffectKind kind) {
   const int dimension = kind->FixedDimension();
   if (dimension < 0) throw Error(std::string("effect '") + kind->name() + "' has one value per rotor");

@@ -258,21 +258,26 @@ class PinResidual : public ceres::CostFunction {
 // - Each held coordinate at its start value: the rows pull on it hard (the lever arm's z is ms_z's
 //   column), and the drift falls with the weight squared: 100 x sqrt(rows) left 0.06 mm of an IMU
 //   lever arm's z on configuration B, 1e4 x sqrt(rows) leaves 1e-5 of that.
-PinResidual* EffectPins(EffectKind kind, const Eigen::VectorXd& start, double rows) {
+// - Each held direction (HeldDirections) at 0, with the held coordinates' weight.
+PinResidual* EffectPins(EffectKind kind, const Eigen::VectorXd& start, double rows,
+                        const Eigen::MatrixXd& held_directions) {
   const Eigen::Index size = start.size();
   const std::vector<int>& held = kind->info().held_coordinates;
-  const Eigen::Index pins = (kind->info().zero_sum ? 1 : 0) + static_cast<Eigen::Index>(held.size());
+  const Eigen::Index pins =
+      (kind->info().zero_sum ? 1 : 0) + static_cast<Eigen::Index>(held.size()) + held_directions.cols();
   if (pins == 0 || size == 0) return nullptr;
   Eigen::MatrixXd combinations = Eigen::MatrixXd::Zero(pins, size);
   Eigen::VectorXd targets = Eigen::VectorXd::Zero(pins);
   Eigen::Index pin = 0;
   if (kind->info().zero_sum) combinations.row(pin++).setConstant(100.0 * std::sqrt(rows));
+  const double weight = 1e4 * std::sqrt(rows);
   for (int k : held) {
     CHECK_LT(k, size) << kind->name() << ": held coordinate out of range";
-    const double weight = 1e4 * std::sqrt(rows);
     combinations(pin, k) = weight;
     targets[pin++] = weight * start[k];
   }
+  for (Eigen::Index d = 0; d < held_directions.cols(); ++d)
+    combinations.row(pin++) = weight * held_directions.col(d).transpose();
   return new PinResidual(std::move(combinations), std::move(targets));
 }
 
@@ -300,6 +305,7 @@ struct EffectProblem {
   internal::EffectBlocks effect_blocks;
   Eigen::VectorXd scaled_chi;                  // chi in units of context.chi_scale
   std::vector<Eigen::VectorXd> effect_values;  // per free effect, in units of its RefineScale
+  std::vector<Eigen::MatrixXd> held_directions;  // per free effect (HeldDirections)
   std::vector<double*> blocks_of_residual;     // scaled_chi, then each free effect's block
   std::vector<int> fixed, free;                // chi coordinates held at 0 / estimated
   std::vector<std::unique_ptr<RotorSignalCache>> caches;
@@ -307,6 +313,12 @@ struct EffectProblem {
   std::vector<ceres::ResidualBlockId> residual_blocks;
   std::unique_ptr<ceres::Problem> problem;
 };
+
+// Whether the yaw torque's scale kd is among the parameters `tls` estimates.
+bool KdFree(const IdimLayout& system, const TlsSolution& tls) {
+  const auto kd = std::find(system.parameter_names.begin(), system.parameter_names.end(), "kd");
+  return kd != system.parameter_names.end() && tls.essential[static_cast<size_t>(kd - system.parameter_names.begin())];
+}
 
 // The parameter blocks: chi scaled by max(|chi|, std), one block per enabled effect in registry
 // order started at `start` (the other effects stay fixed at their start).
@@ -335,6 +347,8 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
   ep->blocks_of_residual = {ep->scaled_chi.data()};
   for (Eigen::VectorXd& v : ep->effect_values) ep->blocks_of_residual.push_back(v.data());
   for (int k = 0; k < p; ++k) (tls.essential[k] ? ep->free : ep->fixed).push_back(k);
+  const bool kd_free = KdFree(system, tls);
+  for (EffectKind kind : ep->effect_blocks.free) ep->held_directions.push_back(HeldDirections(kind, vehicle, kd_free));
 }
 
 // The anchored criterion's anchor of each flight at tls.chi (none for the TLS criterion), from the
@@ -390,7 +404,8 @@ void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
       ep->problem->SetParameterLowerBound(values, static_cast<int>(a), lower / ep->effect_blocks.Scale(b));
       ep->problem->SetParameterUpperBound(values, static_cast<int>(a), upper / ep->effect_blocks.Scale(b));
     }
-    if (PinResidual* pins = EffectPins(ep->effect_blocks.free[b], ep->effect_values[b], ep->context.total_rows))
+    if (PinResidual* pins =
+            EffectPins(ep->effect_blocks.free[b], ep->effect_values[b], ep->context.total_rows, ep->held_directions[b]))
       ep->residual_blocks.push_back(ep->problem->AddResidualBlock(pins, nullptr, values));
   }
 }
@@ -934,6 +949,22 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     result.warnings.push_back(kind->parameter_name() +
                               " ended on the bound of its physical range: these flights do not determine it "
                               "(or the residual has a cause outside the modelled effects); do not trust it");
+  // Coordinates of one effect whose pins (its held directions) tie them: their correlation is the pins'.
+  std::vector<std::string> pinned_prefixes;
+  for (EffectKind kind : options.effects)
+    if (HeldDirections(kind, linear.flights.front().vehicle, KdFree(linear.system, result.refined)).cols() > 0) {
+      pinned_prefixes.push_back(kind->parameter_name() + "_");
+      result.warnings.push_back(kind->parameter_name() +
+                                ": the rotors' spin pattern of its values (sum of spin x value) "
+                                "is held at 0: kd is not estimated, and without the yaw torque that pattern shows "
+                                "only as a roll-pitch coupling (X layout: what I_xy does) or as roll against pitch "
+                                "gain (+ layout: what I_xx / I_yy do)");
+    }
+  const auto tied_by_pins = [&](int a, int b) {
+    return std::any_of(pinned_prefixes.begin(), pinned_prefixes.end(), [&](const std::string& prefix) {
+      return result.effect_labels[a].rfind(prefix, 0) == 0 && result.effect_labels[b].rfind(prefix, 0) == 0;
+    });
+  };
   result.linear_criterion = linear_criterion;
   result.refined_criterion = EffectCriterion(linear, result.effects);
   result.relative_error_pct =
@@ -941,7 +972,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   // Confounded effects: say how much, and what the data fix instead.
   for (int a = 0; a < result.effect_correlation.rows(); ++a)
     for (int b = a + 1; b < result.effect_correlation.cols(); ++b)
-      if (std::abs(result.effect_correlation(a, b)) > 0.9)
+      if (std::abs(result.effect_correlation(a, b)) > 0.9 && !tied_by_pins(a, b))
         result.warnings.push_back(result.effect_labels[a] + " and " + result.effect_labels[b] +
                                   " are strongly correlated (" + std::to_string(result.effect_correlation(a, b)) +
                                   "): these flights separate them poorly" + WhatATradingPairFixes(result, a, b));

@@ -216,6 +216,12 @@ class EffectDescriptor {
     // take-off flight at 10 Hz, 12 ms at 20 Hz). The diagnosis keeps it only if it holds at half the
     // cut-off.
     bool checked_at_half_cutoff = false;
+    // A per-rotor effect whose rotors' spin pattern (sum_i spin_i value_i) changes no thrust and, at
+    // equal rotor speeds, no roll or pitch moment: only the yaw torque shows it first-hand (elsewhere
+    // it is a roll-pitch coupling on an X quad, what I_xy does, or a gain on roll against pitch on a
+    // + quad, what I_xx / I_yy do). Without kd among the free parameters it is held at 0
+    // (HeldDirections).
+    bool spin_pattern_needs_kd = false;
   };
 
   explicit EffectDescriptor(Info info) : info_(std::move(info)) {}
@@ -319,6 +325,10 @@ inline const char* EffectName(EffectKind kind) { return kind->name().c_str(); }
 inline const char* EffectParameterName(EffectKind kind) { return kind->parameter_name().c_str(); }
 // Dimension without a vehicle (the fixed-size effects).
 int EffectDimension(EffectKind kind);
+// Unit directions of `kind`'s values (one column each, Dimension(vehicle) rows) that the refinement
+// and the diagnosis hold at 0 for this vehicle: the rotors' spin pattern, centred, of an effect with
+// Info::spin_pattern_needs_kd when kd is not free; else none (0 columns).
+Eigen::MatrixXd HeldDirections(EffectKind kind, const Vehicle& vehicle, bool kd_free);
 // Parses an effect name (either form above); throws rotorid::Error listing the valid names.
 EffectKind ParseEffectKind(const std::string& name);
 // Parses "a,b,c" effect lists ("all" for DefaultCandidates(), "every" for AllEffects()); throws
