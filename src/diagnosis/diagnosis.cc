@@ -458,7 +458,7 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
       continue;
     }
     const std::optional<EffectKind> faked =
-        TimingEffectNotHoldingAtHalfCutoff(all_data.linear, KindsOf(mask), result, context, &forward->tested);
+        TimingEffectNotHoldingAtHalfCutoff(all_data.linear, KindsOf(mask), result, context, tested);
     if (faked) {
       kept->erase(std::find(kept->begin(), kept->end(), *faked));
       continue;

@@ -285,6 +285,7 @@ void NoteTimingTwin(EffectKind best, const TestedCandidates& tested, ForwardStep
     if (other == best || !other->info().checked_at_half_cutoff || !test.significant) continue;
     if (std::abs(best_shrink - test.shrink_pct) < kPracticalEquivalence * std::max(best_shrink, test.shrink_pct)) {
       step->timing_twin = other;
+      step->timing_twin_test = test;
       return;
     }
   }
@@ -336,14 +337,10 @@ ForwardSelection SelectForward(SelectionContext* context, const AllDataModel& al
 
 void SwapTimingTwin(const SelectionContext& context, const TimingSeparation& separation, ForwardStep* step) {
   SelectionStep& selection = step->selection;
-  const EffectKind twin = step->timing_twin;
-  const auto refined = std::find_if(step->refined.begin(), step->refined.end(),
-                                    [twin](const std::pair<EffectKind, EffectTest>& r) { return r.first == twin; });
-  step->timing_twin = selection.added;
+  std::swap(selection.added, step->timing_twin);
+  std::swap(selection.test, step->timing_twin_test);
   step->timing_separation = separation;
-  selection.added = twin;
-  selection.after = context.records.at(step->base | Bit(twin)).gap;
-  selection.test = refined->second;
+  selection.after = context.records.at(step->base | Bit(selection.added)).gap;
 }
 
 BackwardElimination EliminateBackward(SelectionContext* context, const std::vector<EffectKind>& selected) {

@@ -161,6 +161,7 @@ struct ForwardStep {
   // A timing effect tied with the added one on the held-out rows, and what the final model's joint
   // fit at half the cut-off made of the two (SwapTimingTwin: it may have put the twin in its place).
   EffectKind timing_twin = nullptr;
+  EffectTest timing_twin_test;  // its test at this step, on top of `base`
   std::optional<TimingSeparation> timing_separation;
 };
 
