@@ -281,20 +281,33 @@ ButterworthOptions HalfCutoff(const DiagnosisOptions& options) {
   return {filter.order, FilterBand::kLowPass, 0.5 * filter.cutoff_hz, 0.0};
 }
 
-// RefineOnAllData on the flights low-passed further, to half the cut-off.
-RefineResult RefineAtHalfCutoff(const IdentificationResult& full, const std::vector<EffectKind>& effects,
-                                const Effects& initial, const DiagnosisOptions& options) {
-  std::vector<ProcessedFlight> flights;
-  for (const ProcessedFlight& flight : full.flights)
-    flights.push_back(LowPassFurther(flight, HalfCutoff(options), options.identify.observation.source));
-  return RefineOnAllData(IdentifyProcessed(std::move(flights), options.identify), effects, initial, options);
-}
+// The identification flights low-passed further, to half the cut-off, and identified there; made on
+// first use and shared by the final model's timing checks (Get throws rotorid::Error when it fails).
+class HalfCutoffIdentification {
+ public:
+  HalfCutoffIdentification(const IdentificationResult& full, const DiagnosisOptions& options)
+      : full_(full), options_(options) {}
+  const IdentificationResult& Get() {
+    if (!identified_) {
+      std::vector<ProcessedFlight> flights;
+      for (const ProcessedFlight& flight : full_.flights)
+        flights.push_back(LowPassFurther(flight, HalfCutoff(options_), options_.identify.observation.source));
+      identified_ = IdentifyProcessed(std::move(flights), options_.identify);
+    }
+    return *identified_;
+  }
+
+ private:
+  const IdentificationResult& full_;
+  const DiagnosisOptions& options_;
+  std::optional<IdentificationResult> identified_;
+};
 
 // A kept timing effect and its twin (ForwardStep::timing_twin) refined together with the other kept
 // effects at half the cut-off (internal::TimingSeparation), each started at half the kept one's value:
 // the fit then slides along the line of their sum to where their shapes fit. Nullopt, with a
 // warning, when it fails.
-std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(const IdentificationResult& full,
+std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(HalfCutoffIdentification* at_half,
                                                                      internal::SelectionContext* context,
                                                                      const std::vector<EffectKind>& kept,
                                                                      const Effects& final_effects, EffectKind selected,
@@ -307,7 +320,7 @@ std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(const Ident
   model.push_back(other);
   RefineResult joint;
   try {
-    joint = RefineAtHalfCutoff(full, model, initial, context->options);
+    joint = RefineOnAllData(at_half->Get(), model, initial, context->options);
   } catch (const Error& e) {
     context->warnings.push_back(std::string(EffectName(selected)) + " and " + EffectName(other) +
                                 " were not refined together at half the cut-off (" + e.what() + ")");
@@ -342,7 +355,7 @@ std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(const Ident
 // at 5 Hz), while one the controller's reply to sensor noise fakes lives between the two cut-offs
 // (a clean take-off flight: 1.06 +- 0.13 ms at 10 Hz, 0.07 +- 0.06 at 4 Hz). It does not hold when
 // it is not significant there (below 3 std) or less than half its size at the cut-off.
-std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(const IdentificationResult& full,
+std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(HalfCutoffIdentification* half_cutoff,
                                                              const std::vector<EffectKind>& kept,
                                                              const RefineResult& at_cutoff,
                                                              internal::SelectionContext* context,
@@ -355,7 +368,7 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(const Identificatio
   const ButterworthOptions half = HalfCutoff(context->options);
   RefineResult at_half;
   try {
-    at_half = RefineAtHalfCutoff(full, kept, at_cutoff.effects, context->options);
+    at_half = RefineOnAllData(half_cutoff->Get(), kept, at_cutoff.effects, context->options);
   } catch (const Error& e) {
     context->warnings.push_back("the timing effects were not checked at half the cut-off (" + std::string(e.what()) +
                                 ")");
@@ -385,7 +398,7 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(const Identificatio
 // Separates each kept timing effect from its twin not separated yet (SeparateTimingAtHalfCutoff) and,
 // where the data at half the cut-off decide for the twin, puts it in the kept one's place, in `kept`
 // and in the forward step that added it; true when it did (the final model is then refined again).
-bool SeparatedTimingTwin(const IdentificationResult& full, const Effects& final_effects,
+bool SeparatedTimingTwin(HalfCutoffIdentification* at_half, const Effects& final_effects,
                          internal::SelectionContext* context, std::vector<EffectKind>* kept,
                          internal::ForwardSelection* forward) {
   for (internal::ForwardStep& step : forward->steps) {
@@ -393,7 +406,8 @@ bool SeparatedTimingTwin(const IdentificationResult& full, const Effects& final_
     const auto in_kept = std::find(kept->begin(), kept->end(), added);
     if (!step.timing_twin || step.timing_separation || in_kept == kept->end()) continue;
     if (std::find(kept->begin(), kept->end(), step.timing_twin) != kept->end()) continue;
-    step.timing_separation = SeparateTimingAtHalfCutoff(full, context, *kept, final_effects, added, step.timing_twin);
+    step.timing_separation =
+        SeparateTimingAtHalfCutoff(at_half, context, *kept, final_effects, added, step.timing_twin);
     if (!step.timing_separation || step.timing_separation->decided != step.timing_twin) continue;
     *in_kept = step.timing_twin;
     std::replace(forward->selected.begin(), forward->selected.end(), added, step.timing_twin);
@@ -419,6 +433,7 @@ struct FinalModel {
 FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::SelectionContext* context,
                          std::vector<EffectKind>* kept, internal::ForwardSelection* forward) {
   internal::TestedCandidates* tested = &forward->tested;
+  HalfCutoffIdentification at_half(all_data.linear, context->options);
   for (EffectMask previous = internal::MaskOf(*kept);;) {
     FinalModel model;
     model.parameters = all_data.parameters;
@@ -458,12 +473,12 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
       continue;
     }
     const std::optional<EffectKind> faked =
-        TimingEffectNotHoldingAtHalfCutoff(all_data.linear, KindsOf(mask), result, context, tested);
+        TimingEffectNotHoldingAtHalfCutoff(&at_half, KindsOf(mask), result, context, tested);
     if (faked) {
       kept->erase(std::find(kept->begin(), kept->end(), *faked));
       continue;
     }
-    if (!SeparatedTimingTwin(all_data.linear, result.effects, context, kept, forward)) return model;
+    if (!SeparatedTimingTwin(&at_half, result.effects, context, kept, forward)) return model;
   }
 }
 
