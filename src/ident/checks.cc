@@ -362,11 +362,22 @@ bool YawScaleFlipped(const CheckedParameters& p, const std::vector<std::string>&
   return false;
 }
 
+// The cause to name when only I_xx + I_yy < I_zz fails with kd estimated and positive: the same
+// unfixed yaw scale with both signs right (simulated take-off and low hover of configuration A: kd
+// 1.25e-7 and I_zz 0.071, each at a 10 % std, for 5.1e-8 and 0.029; their ratio within 0.1 %).
+std::string YawScaleTooLargeCause(const Estimate& kd, const Estimate& zz) {
+  return "I_zz alone is too large, with kd: the yaw equation fixes their ratio (kd / I_zz = " +
+         ShortNumber(kd.value / zz.value) +
+         "), and this log has too little yaw motion to fix their scale; fly yaw manoeuvres, or take kd from a "
+         "thrust stand";
+}
+
 // `yaw_anchored`: kd is estimated. Without it the yaw equation has no known scale and I_zz comes
 // from the gyroscopic terms alone, so it is left out of the tests. `yaw_scale_flipped`: see
 // kYawScaleCause, named instead of the inputs.
-Check InertiaCheck(const CheckedParameters& p, const std::string& config, const std::string& label, bool yaw_anchored,
+Check InertiaCheck(const CheckedParameters& p, const std::string& config, const std::string& label, const Estimate& kd,
                    bool yaw_scale_flipped) {
+  const bool yaw_anchored = kd.estimated;
   const std::string name = label + " " + config;
   auto get = [&](const char* n) { return Find(p, config + "." + n); };
   const Estimate xx = get("I_xx"), yy = get("I_yy");
@@ -375,10 +386,13 @@ Check InertiaCheck(const CheckedParameters& p, const std::string& config, const 
   const Estimate* diagonal[3] = {&xx, &yy, &zz};
   const char* axis[3] = {"I_xx", "I_yy", "I_zz"};
   std::string problems;
+  bool only_zz_too_large = true;
   for (int a = 0; a < 3; ++a) {
     const Estimate& e = *diagonal[a];
-    if (e.estimated && e.value < -3.0 * e.std)
+    if (e.estimated && e.value < -3.0 * e.std) {
       problems += std::string(problems.empty() ? "" : "; ") + axis[a] + " = " + ShortNumber(e.value) + " < 0";
+      only_zz_too_large = false;
+    }
   }
   // Triangle inequalities I_a + I_b >= I_c between the estimated diagonal entries, beyond 3 std.
   for (int c = 0; c < 3; ++c) {
@@ -386,26 +400,33 @@ Check InertiaCheck(const CheckedParameters& p, const std::string& config, const 
     if (!a.estimated || !b.estimated || !z.estimated) continue;
     const double margin = a.value + b.value - z.value;
     const double std = std::sqrt(a.std * a.std + b.std * b.std + z.std * z.std);
-    if (margin < -3.0 * std)
+    if (margin < -3.0 * std) {
       problems += std::string(problems.empty() ? "" : "; ") + axis[(c + 1) % 3] + " + " + axis[(c + 2) % 3] + " < " +
                   axis[c] + " by " + ShortNumber(-margin);
+      only_zz_too_large = only_zz_too_large && c == 2;
+    }
   }
   if (problems.empty() && xx.estimated && yy.estimated && zz.estimated) {
     Eigen::Matrix3d inertia;
     inertia << xx.value, get("I_xy").value, get("I_xz").value, get("I_xy").value, yy.value, get("I_yz").value,
         get("I_xz").value, get("I_yz").value, zz.value;
     const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia).eigenvalues()[0];
-    if (!(smallest > 0.0)) problems = "smallest eigenvalue " + ShortNumber(smallest) + " <= 0";
+    if (!(smallest > 0.0)) {
+      problems = "smallest eigenvalue " + ShortNumber(smallest) + " <= 0";
+      only_zz_too_large = false;
+    }
   }
   if (problems.empty())
     return {"inertia", CheckStatus::kOk,
             name + ": positive definite, triangle inequalities hold" +
                 (yaw_anchored ? "" : " (I_zz not tested: kd not estimated, so the yaw equation has no scale)")};
-  return {"inertia", CheckStatus::kError,
-          name + " inertia is not physical (" + problems + "): " +
-              (yaw_scale_flipped ? std::string(kYawScaleCause)
-                                 : "a wrong rotor order, spin or unit in the inputs (see the input checks), or a log "
-                                   "that does not excite these axes")};
+  return {
+      "inertia", CheckStatus::kError,
+      name + " inertia is not physical (" + problems + "): " +
+          (yaw_scale_flipped                              ? std::string(kYawScaleCause)
+           : only_zz_too_large && kd.value > 3.0 * kd.std ? YawScaleTooLargeCause(kd, zz)
+                                                          : "a wrong rotor order, spin or unit in the inputs (see the "
+                                                            "input checks), or a log that does not excite these axes")};
 }
 
 }  // namespace
@@ -448,8 +469,7 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
   else
     checks.push_back({"kd_positive", CheckStatus::kOk,
                       label + ": kd = " + ShortNumber(kd.value) + (kd.estimated ? "" : " (not estimated)")});
-  for (const std::string& config : configs)
-    checks.push_back(InertiaCheck(p, config, label, kd.estimated, yaw_scale_flipped));
+  for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd, yaw_scale_flipped));
   return checks;
 }
 

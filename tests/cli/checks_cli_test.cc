@@ -302,5 +302,26 @@ TEST(Checks, NegativeKdAndIzzNameTheYawScaleNotTheSpins) {
   }
 }
 
+// kd and I_zz both positive and 2.4 times too large, their ratio right (a simulated take-off and low
+// hover of configuration A): only I_xx + I_yy < I_zz fails, and the check names the yaw scale and the
+// ratio the log does fix. With a roll inertia that fails too, the cause is not only the yaw scale.
+TEST(Checks, TooLargeIzzWithKdNamesTheYawScale) {
+  CheckedParameters p;
+  p.value = {{"kt", 3.67e-6}, {"kd", 1.25e-7}, {"A.I_xx", 0.0173}, {"A.I_yy", 0.0183}, {"A.I_zz", 0.0711}};
+  p.std = {{"kt", 1.3e-8}, {"kd", 1.25e-8}, {"A.I_xx", 1.9e-4}, {"A.I_yy", 1.8e-4}, {"A.I_zz", 7.1e-3}};
+  for (const auto& [name, value] : p.value) p.essential[name] = true;
+  const std::string failed = FailedCheckMessages(CheckParameters(p, {"A"}, "linear"));
+  EXPECT_NE(failed.find("I_xx + I_yy < I_zz"), std::string::npos) << failed;
+  EXPECT_NE(failed.find("kd / I_zz = 1.76e-06"), std::string::npos) << failed;
+  EXPECT_NE(failed.find("too little yaw motion to fix their scale"), std::string::npos) << failed;
+  EXPECT_EQ(failed.find("rotor order"), std::string::npos) << failed;
+
+  p.value["A.I_xx"] = -0.0173;
+  const std::string both = FailedCheckMessages(CheckParameters(p, {"A"}, "linear"));
+  EXPECT_NE(both.find("I_xx = -0.0173 < 0"), std::string::npos) << both;
+  EXPECT_NE(both.find("rotor order"), std::string::npos) << both;
+  EXPECT_EQ(both.find("yaw motion"), std::string::npos) << both;
+}
+
 }  // namespace
 }  // namespace rotorid
