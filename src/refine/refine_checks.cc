@@ -71,6 +71,24 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
   return checks;
 }
 
+void ExcuseLinearErrorTheRefinementExplains(const RefineResult& refined, std::vector<Check>* checks) {
+  std::string refined_errors;
+  for (size_t j = 0; j < refined.relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j) {
+    const std::optional<double>& e = refined.relative_error_pct[j];
+    if (!e) continue;
+    if (!(*e <= 100.0)) return;  // above 100 % or not finite: the refined model does not explain it either
+    refined_errors += std::string(refined_errors.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " +
+                      FormatValue("%.3g", *e) + " %";
+  }
+  if (refined_errors.empty()) return;
+  for (Check& check : *checks)
+    if (check.name == "relative_error" && check.status == CheckStatus::kError &&
+        check.message.rfind("linear: ", 0) == 0)
+      check = {check.name, CheckStatus::kWarning,
+               check.message.substr(0, check.message.find("): ") + 1) +
+                   ": the linear model lacks what the refined effects supply (refined: " + refined_errors + ")"};
+}
+
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
                               const DelayOptions& options) {
   std::vector<Check> checks = RefinedParameterChecks(linear, estimate.refined, "delay");
