@@ -71,6 +71,9 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
   return checks;
 }
 
+// Only this one: a linear error that is not finite is a failure of the computation, not of the model.
+constexpr char kLinearAbove100[] = "linear: relative error above 100 % (";
+
 void ExcuseLinearErrorTheRefinementExplains(const RefineResult& refined, std::vector<Check>* checks) {
   std::string refined_errors;
   for (size_t j = 0; j < refined.relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j) {
@@ -81,12 +84,15 @@ void ExcuseLinearErrorTheRefinementExplains(const RefineResult& refined, std::ve
                       FormatValue("%.3g", *e) + " %";
   }
   if (refined_errors.empty()) return;
-  for (Check& check : *checks)
-    if (check.name == "relative_error" && check.status == CheckStatus::kError &&
-        check.message.rfind("linear: ", 0) == 0)
-      check = {check.name, CheckStatus::kWarning,
-               check.message.substr(0, check.message.find("): ") + 1) +
-                   ": the linear model lacks what the refined effects supply (refined: " + refined_errors + ")"};
+  for (Check& check : *checks) {
+    const size_t end = check.message.find("): ");  // the end of the list of components above 100 %
+    if (check.name != "relative_error" || check.status != CheckStatus::kError ||
+        check.message.rfind(kLinearAbove100, 0) != 0 || end == std::string::npos)
+      continue;
+    check = {check.name, CheckStatus::kWarning,
+             check.message.substr(0, end + 1) + ": the linear model lacks what the refined effects supply (refined: " +
+                 refined_errors + ")"};
+  }
 }
 
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,

@@ -43,6 +43,11 @@ TEST(ExcuseLinearErrorTheRefinementExplains, StaysAnErrorWhenTheRefinedModelFail
   std::vector<Check> checks = LinearChecks();
   ExcuseLinearErrorTheRefinementExplains(RefinedWithErrors({}), &checks);
   EXPECT_TRUE(AnyCheckFailed(checks));
+  // A linear error that is not finite is a failure of the computation: left an error.
+  std::vector<Check> not_finite = CheckRelativeError({0.1, 0.1, 0.1, std::numeric_limits<double>::infinity(), 1.0, 1.0},
+                                                     "linear", /*held_out=*/false);
+  ExcuseLinearErrorTheRefinementExplains(RefinedWithErrors({0.1, 0.1, 0.1, 1.0, 1.0, 1.0}), &not_finite);
+  EXPECT_TRUE(AnyCheckFailed(not_finite));
   // Other checks and the held-out ones are left alone.
   std::vector<Check> others = {{"inertia", CheckStatus::kError, "linear A inertia is not physical (...)"},
                                {"relative_error", CheckStatus::kError, "held-out refined: relative error ..."}};
