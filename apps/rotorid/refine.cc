@@ -111,7 +111,7 @@ Command AddRefineCommand(CLI::App& root) {
     const RefineResult refined = Refine(linear, refine, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
-    ExcuseLinearErrorTheRefinementExplains(refined, &checks);
+    ExcuseLinearErrorTheRefinementExplains(linear, refined, &checks);
 
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)},

@@ -473,19 +473,24 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
   return checks;
 }
 
+std::string RelativeErrorList(const std::vector<std::optional<double>>& relative_error_pct, double above_pct) {
+  std::string list;
+  for (size_t j = 0; j < relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j)
+    if (relative_error_pct[j] && *relative_error_pct[j] > above_pct)
+      list += std::string(list.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " +
+              ShortNumber(*relative_error_pct[j]) + " %";
+  return list;
+}
+
 std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& relative_error_pct,
                                       const std::string& label, bool held_out) {
-  std::string above, not_finite;
-  for (size_t j = 0; j < relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j) {
-    if (!relative_error_pct[j]) continue;
-    const double e = *relative_error_pct[j];
-    if (!std::isfinite(e))
+  std::string not_finite;
+  for (size_t j = 0; j < relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j)
+    if (relative_error_pct[j] && !std::isfinite(*relative_error_pct[j]))
       not_finite += std::string(not_finite.empty() ? "" : ", ") + kWrenchComponentNames[j];
-    else if (e > 100.0)
-      above += std::string(above.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " + ShortNumber(e) + " %";
-  }
   if (!not_finite.empty())
     return {{"relative_error", CheckStatus::kError, label + ": relative error not finite in " + not_finite}};
+  const std::string above = RelativeErrorList(relative_error_pct, 100.0);
   if (!above.empty())
     return {{"relative_error", held_out ? CheckStatus::kWarning : CheckStatus::kError,
              label + ": relative error above 100 % (" + above +

@@ -71,28 +71,21 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
   return checks;
 }
 
-// Only this one: a linear error that is not finite is a failure of the computation, not of the model.
-constexpr char kLinearAbove100[] = "linear: relative error above 100 % (";
-
-void ExcuseLinearErrorTheRefinementExplains(const RefineResult& refined, std::vector<Check>* checks) {
-  std::string refined_errors;
-  for (size_t j = 0; j < refined.relative_error_pct.size() && j < kWrenchComponentNames.size(); ++j) {
-    const std::optional<double>& e = refined.relative_error_pct[j];
-    if (!e) continue;
-    if (!(*e <= 100.0)) return;  // above 100 % or not finite: the refined model does not explain it either
-    refined_errors += std::string(refined_errors.empty() ? "" : ", ") + kWrenchComponentNames[j] + " " +
-                      FormatValue("%.3g", *e) + " %";
-  }
-  if (refined_errors.empty()) return;
-  for (Check& check : *checks) {
-    const size_t end = check.message.find("): ");  // the end of the list of components above 100 %
-    if (check.name != "relative_error" || check.status != CheckStatus::kError ||
-        check.message.rfind(kLinearAbove100, 0) != 0 || end == std::string::npos)
-      continue;
-    check = {check.name, CheckStatus::kWarning,
-             check.message.substr(0, end + 1) + ": the linear model lacks what the refined effects supply (refined: " +
-                 refined_errors + ")"};
-  }
+void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
+                                            std::vector<Check>* checks) {
+  for (const std::optional<double>& e : refined.relative_error_pct)
+    if (e && !(*e <= 100.0)) return;  // above 100 % or not finite: the refined model does not explain it either
+  for (const std::optional<double>& e : linear.relative_error_pct)
+    if (e && !std::isfinite(*e)) return;  // a failure of the computation, not of the model
+  const std::string refined_errors = RelativeErrorList(refined.relative_error_pct, -HUGE_VAL);
+  const std::string linear_above = RelativeErrorList(linear.relative_error_pct, 100.0);
+  if (refined_errors.empty() || linear_above.empty()) return;
+  const Check above = CheckRelativeError(linear.relative_error_pct, "linear", /*held_out=*/false).front();
+  for (Check& check : *checks)
+    if (check.name == above.name && check.status == CheckStatus::kError && check.message == above.message)
+      check = {check.name, CheckStatus::kWarning,
+               "linear: relative error above 100 % (" + linear_above +
+                   "): the linear model lacks what the refined effects supply (refined: " + refined_errors + ")"};
 }
 
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,

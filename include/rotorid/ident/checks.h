@@ -71,6 +71,8 @@ CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolutio
 // `label` says which model ("linear", "refined").
 std::vector<Check> CheckParameters(const CheckedParameters& parameters, const std::vector<std::string>& configs,
                                    const std::string& label);
+// "Mx 763 %, My 988 %": the components of Table III that are present and above `above_pct`.
+std::string RelativeErrorList(const std::vector<std::optional<double>>& relative_error_pct, double above_pct);
 // Table III above 100 % (error on the identification flights, warning on held-out ones) or not finite.
 std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& relative_error_pct,
                                       const std::string& label, bool held_out);

@@ -22,7 +22,8 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
 // IMU lever arm's centripetal acceleration on a yaw spin: 763-988 % in roll and pitch). When every
 // error of the refined model is within 100 %, the refinement explains it: that check of `checks`
 // becomes a warning that says so, and the refined model's own checks decide the exit.
-void ExcuseLinearErrorTheRefinementExplains(const RefineResult& refined, std::vector<Check>* checks);
+void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
+                                            std::vector<Check>* checks);
 
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
                               const DelayOptions& options);
