@@ -455,7 +455,7 @@ CoreSolve SolveNoiseAware(const IdimSystem& system, const GroupFactors& factors,
 std::vector<int> CriterionColumns(const TlsSolution& solution) {
   std::vector<int> columns;
   for (int k = 0; k < static_cast<int>(solution.chi.size()); ++k)
-    if (solution.essential[k]) columns.push_back(k);
+    if (solution.essential[k] || solution.Profiled(k)) columns.push_back(k);
   columns.push_back(static_cast<int>(solution.chi.size()));
   return columns;
 }
@@ -503,6 +503,29 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   // Per group, set by the first (full-model) noise-aware solve; -1 until then.
   std::vector<double> start_var(system.num_groups(), -1.0);
   CoreSolve core;
+  // Discarded by the selection but kept in the criterion (TlsSolution::profiled): a parameter whose
+  // physics excludes 0 is not held there, since its signal would stay in the rows and move the
+  // parameters whose columns correlate with it.
+  std::vector<int> profiled;
+  auto is_profiled = [&](int column) { return std::find(profiled.begin(), profiled.end(), column) != profiled.end(); };
+  auto discard = [&](DiscardedParameter dropped, int index_in_free) {
+    const bool profile = options.method == TlsMethod::kNoiseAware && PositiveByPhysics(dropped.name);
+    if (profile) dropped.reason += "; estimated beside the others, not held at 0 (its physics excludes 0)";
+    solution.discarded.push_back(dropped);
+    if (profile) {
+      profiled.push_back(free[index_in_free]);
+    } else {
+      free.erase(free.begin() + index_in_free);
+    }
+  };
+  for (const std::string& name : options.discarded_from_start) {
+    const auto it = std::find_if(free.begin(), free.end(), [&](int k) { return system.parameter_names[k] == name; });
+    if (it == free.end()) throw Error("cannot discard '" + name + "': not a free parameter of these flights");
+    DiscardedParameter dropped;
+    dropped.name = name;
+    dropped.reason = "held discarded";
+    discard(dropped, static_cast<int>(it - free.begin()));
+  }
   while (true) {
     std::vector<int> columns = free;
     columns.push_back(p);
@@ -529,10 +552,17 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
       dropped.correlation = 1.0;
       dropped.reason =
           "not identifiable: only a combination with " + dropped.most_correlated + " is determined by these flights";
+      if (is_profiled(free[first])) {  // discarded before for its %sigma: now it leaves the criterion
+        profiled.erase(std::find(profiled.begin(), profiled.end(), free[first]));
+        solution.discarded.erase(std::find_if(solution.discarded.begin(), solution.discarded.end(),
+                                              [&](const DiscardedParameter& d) { return d.name == dropped.name; }));
+      }
       solution.discarded.push_back(dropped);
       free.erase(free.begin() + first);
       continue;
     }
+    for (int k = 0; k < nf; ++k)
+      if (is_profiled(free[k])) rel[k] = -1.0;
     int worst = 0;
     rel.maxCoeff(&worst);
     const bool stop = options.method == TlsMethod::kPaper ? rel.maxCoeff() / rel.minCoeff() < options.r_sigma
@@ -553,8 +583,7 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
         dropped.most_correlated = system.parameter_names[free[k]];
       }
     }
-    solution.discarded.push_back(dropped);
-    free.erase(free.begin() + worst);
+    discard(dropped, worst);
   }
 
   const int nf = static_cast<int>(free.size());
@@ -562,11 +591,22 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   solution.essential.assign(p, false);
   solution.covariance = Eigen::MatrixXd::Zero(p, p);
   for (int a = 0; a < nf; ++a) {
+    if (is_profiled(free[a])) continue;
     solution.chi[free[a]] = core.chi_t[a];
     solution.essential[free[a]] = true;
-    for (int b = 0; b < nf; ++b) solution.covariance(free[a], free[b]) = core.covariance(a, b);
+    for (int b = 0; b < nf; ++b)
+      if (!is_profiled(free[b])) solution.covariance(free[a], free[b]) = core.covariance(a, b);
   }
+  solution.profiled.assign(p, false);
+  solution.profiled_chi = Eigen::VectorXd::Zero(p);
+  for (int a = 0; a < nf; ++a)
+    if (is_profiled(free[a])) {
+      solution.profiled[free[a]] = true;
+      solution.profiled_chi[free[a]] = core.chi_t[a];
+    }
   solution.std = solution.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (int a = 0; a < nf; ++a)
+    if (is_profiled(free[a])) solution.std[free[a]] = std::sqrt(std::max(core.covariance(a, a), 0.0));
   solution.rel_std_pct = Eigen::VectorXd::Zero(p);
   for (int k = 0; k < p; ++k)
     if (solution.chi[k] != 0.0) solution.rel_std_pct[k] = 100.0 * solution.std[k] / std::abs(solution.chi[k]);

@@ -1,5 +1,7 @@
 #include "rotorid/model/parameters.h"
 
+#include "rotorid/core/text.h"
+
 namespace rotorid {
 
 Eigen::Matrix<double, kNumBodyParameters, 1> BodyParameters::ToVector() const {
@@ -22,6 +24,10 @@ BodyParameters AddPointMass(const BodyParameters& body, double mass_kg, const Ei
   out.first_moment += mass_kg * p_m;
   out.inertia += mass_kg * (p_m.squaredNorm() * Eigen::Matrix3d::Identity() - p_m * p_m.transpose());
   return out;
+}
+
+bool PositiveByPhysics(const std::string& name) {
+  return name == "kt" || name == "kd" || EndsWith(name, ".I_xx") || EndsWith(name, ".I_yy") || EndsWith(name, ".I_zz");
 }
 
 }  // namespace rotorid

@@ -329,8 +329,10 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
   ep->context.total_rows = static_cast<double>(system.row_group.size());
   ep->context.num_parameters = p;
   ep->context.chi_scale.resize(p);
-  for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(tls.chi[k]), tls.std[k], 1e-12});
-  ep->scaled_chi = tls.chi.cwiseQuotient(ep->context.chi_scale);
+  // The profiled parameters start at their estimate (TlsSolution::profiled).
+  const Eigen::VectorXd start_chi = tls.profiled_chi.size() == p ? tls.chi + tls.profiled_chi : tls.chi;
+  for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(start_chi[k]), tls.std[k], 1e-12});
+  ep->scaled_chi = start_chi.cwiseQuotient(ep->context.chi_scale);
   const Vehicle& vehicle = flights.front().vehicle;
   ep->effect_blocks.fixed = start;
   for (EffectKind kind : AllEffects())
@@ -346,7 +348,7 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
   }
   ep->blocks_of_residual = {ep->scaled_chi.data()};
   for (Eigen::VectorXd& v : ep->effect_values) ep->blocks_of_residual.push_back(v.data());
-  for (int k = 0; k < p; ++k) (tls.essential[k] ? ep->free : ep->fixed).push_back(k);
+  for (int k = 0; k < p; ++k) (tls.essential[k] || tls.Profiled(k) ? ep->free : ep->fixed).push_back(k);
   const bool kd_free = KdFree(system, tls);
   for (EffectKind kind : ep->effect_blocks.free) ep->held_directions.push_back(HeldDirections(kind, vehicle, kd_free));
 }
@@ -388,8 +390,9 @@ void AddRowResiduals(const std::vector<ProcessedFlight>& flights, const IdimLayo
   }
 }
 
-// Discarded (non-essential) parameters stay at zero, as in the TLS step; effects within their
-// bounds; a zero-sum effect's sum and the held coordinates pinned.
+// Discarded (non-essential) parameters stay at zero, as in the TLS step (the profiled ones are
+// estimated there and here: TlsSolution::profiled); effects within their bounds; a zero-sum
+// effect's sum and the held coordinates pinned.
 void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
   const int p = ep->context.num_parameters;
   if (ep->free.empty()) {
@@ -732,9 +735,11 @@ void ComputeRefinedCovariance(const EffectProblem& ep, const SolutionJacobian& j
   const std::vector<int>& free = ep.free;
   const Eigen::VectorXd& chi_scale = ep.context.chi_scale;
   const int offset = static_cast<int>(free.size());
+  const TlsSolution& refined = result->refined;
   for (int a = 0; a < offset; ++a)
     for (int b = 0; b < offset; ++b)
-      result->refined.covariance(free[a], free[b]) = full(a, b) * chi_scale[free[a]] * chi_scale[free[b]];
+      if (!refined.Profiled(free[a]) && !refined.Profiled(free[b]))
+        result->refined.covariance(free[a], free[b]) = full(a, b) * chi_scale[free[a]] * chi_scale[free[b]];
   const Eigen::Index effect_dim = dim - offset;
   const Eigen::MatrixXd effect_cov = full.block(offset, offset, effect_dim, effect_dim);
   Eigen::Index e = 0;
@@ -774,6 +779,8 @@ RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const Idi
   result.effects = ep.effect_blocks.At(ep.blocks_of_residual.data(), flights.front().vehicle);
   result.refined = tls;
   result.refined.chi = chi;
+  for (int k = 0; k < chi.size(); ++k)
+    if (tls.Profiled(k)) result.refined.chi[k] = 0.0;  // estimated, not reported
   result.refined.covariance.setZero();
   result.refined.std.setZero();
   result.refined.rel_std_pct.setZero();
@@ -830,11 +837,6 @@ bool SearchesDelayGrid(const RefineOptions& options) {
                                                     [](EffectKind kind) { return kind->info().grid_searched; });
 }
 
-// kt, kd and the inertia's diagonal: parameters whose physics fixes their sign (positive).
-bool PositiveByPhysics(const std::string& name) {
-  return name == "kt" || name == "kd" || EndsWith(name, ".I_xx") || EndsWith(name, ".I_yy") || EndsWith(name, ".I_zz");
-}
-
 // The TLS re-selected on the rows corrected by the effects, but with the parameters that the linear
 // step discarded and that come back with a sign their physics excludes (beyond 3 std) held
 // discarded, as the linear step had them; `held` names those. On a flight with little yaw the yaw
@@ -850,11 +852,13 @@ TlsSolution ReselectEssential(const IdimSystem& corrected, const IdentificationR
     if (linear.solution.essential[k] || !reselected.essential[k] || !PositiveByPhysics(name) ||
         reselected.chi[k] >= -3.0 * reselected.std[k])
       continue;
-    holding.fixed_zero.push_back(name);
+    holding.discarded_from_start.push_back(name);
     *held += (held->empty() ? "" : ", ") + name + " = " + ShortNumber(reselected.chi[k]) + " +- " +
              ShortNumber(reselected.std[k]);
   }
-  return holding.fixed_zero.size() == linear.options.tls.fixed_zero.size() ? reselected : SolveIdim(corrected, holding);
+  return holding.discarded_from_start.size() == linear.options.tls.discarded_from_start.size()
+             ? reselected
+             : SolveIdim(corrected, holding);
 }
 
 }  // namespace

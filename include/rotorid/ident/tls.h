@@ -87,6 +87,9 @@ struct TlsOptions {
   int max_iterations = 30;
   // Parameters (by name) never dropped and never estimated: held at 0 ("discard").
   std::vector<std::string> fixed_zero;
+  // Parameters (by name) discarded before the selection starts, as if it had dropped them (the
+  // refinement's re-selection holds those that come back with a sign their physics excludes).
+  std::vector<std::string> discarded_from_start;
 
   std::string Validate() const;
 };
@@ -119,6 +122,16 @@ struct TlsSolution {
   bool usable = true;
   std::string message;            // why it is not usable
   std::vector<std::string> warnings;
+  // Discarded parameters whose physics excludes 0 (PositiveByPhysics: kt, kd, the inertia's
+  // diagonal), noise-aware method: not reported (chi and covariance hold 0, as for the other
+  // discarded ones; std is their std in the criterion) but estimated beside the essential ones,
+  // in the TLS and in the refinement. Held at 0 their signal would stay in the rows and move the
+  // parameters whose columns correlate with it: on a take-off flight with little yaw, I_zz w'_z left
+  // in the yaw rows moved the first moment through the lateral specific force (c x w' in the
+  // accelerometer), and per-rotor thrust scales took its place (docs/method.md 3).
+  std::vector<bool> profiled;
+  Eigen::VectorXd profiled_chi;  // their estimates, 0 elsewhere (the refinement starts there)
+  bool Profiled(int k) const { return !profiled.empty() && profiled[k]; }
 };
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);

@@ -44,6 +44,10 @@ struct VehicleParameters {
   RotorCoefficients rotor;
 };
 
+// kt, kd and the inertia's diagonal (a system parameter name, "kd" or "<config>.I_xx"): parameters
+// whose physics fixes their sign (positive) and excludes zero.
+bool PositiveByPhysics(const std::string& name);
+
 // Adds a point mass (kg) at position p (m, in F_d) to the body parameters: exact for ms and the
 // inertia at O_d (I += m (|p|^2 1 - p p^T)).
 BodyParameters AddPointMass(const BodyParameters& body, double mass_kg, const Eigen::Vector3d& p_m);
