@@ -780,7 +780,10 @@ RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const Idi
   result.refined = tls;
   result.refined.chi = chi;
   for (int k = 0; k < chi.size(); ++k)
-    if (tls.Profiled(k)) result.refined.chi[k] = 0.0;  // estimated, not reported
+    if (tls.Profiled(k)) {  // estimated, not reported
+      result.refined.profiled_chi[k] = chi[k];
+      result.refined.chi[k] = 0.0;
+    }
   result.refined.covariance.setZero();
   result.refined.std.setZero();
   result.refined.rel_std_pct.setZero();
