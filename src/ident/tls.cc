@@ -599,14 +599,14 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   }
   solution.profiled.assign(p, false);
   solution.profiled_chi = Eigen::VectorXd::Zero(p);
+  solution.profiled_std = Eigen::VectorXd::Zero(p);
   for (int a = 0; a < nf; ++a)
     if (is_profiled(free[a])) {
       solution.profiled[free[a]] = true;
       solution.profiled_chi[free[a]] = core.chi_t[a];
+      solution.profiled_std[free[a]] = std::sqrt(std::max(core.covariance(a, a), 0.0));
     }
   solution.std = solution.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  for (int a = 0; a < nf; ++a)
-    if (is_profiled(free[a])) solution.std[free[a]] = std::sqrt(std::max(core.covariance(a, a), 0.0));
   solution.rel_std_pct = Eigen::VectorXd::Zero(p);
   for (int k = 0; k < p; ++k)
     if (solution.chi[k] != 0.0) solution.rel_std_pct[k] = 100.0 * solution.std[k] / std::abs(solution.chi[k]);

@@ -330,8 +330,10 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
   ep->context.num_parameters = p;
   ep->context.chi_scale.resize(p);
   // The profiled parameters start at their estimate (TlsSolution::profiled).
-  const Eigen::VectorXd start_chi = tls.profiled_chi.size() == p ? tls.chi + tls.profiled_chi : tls.chi;
-  for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(start_chi[k]), tls.std[k], 1e-12});
+  const bool profiled = tls.profiled_chi.size() == p;
+  const Eigen::VectorXd start_chi = profiled ? tls.chi + tls.profiled_chi : tls.chi;
+  const Eigen::VectorXd start_std = profiled ? tls.std + tls.profiled_std : tls.std;
+  for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(start_chi[k]), start_std[k], 1e-12});
   ep->scaled_chi = start_chi.cwiseQuotient(ep->context.chi_scale);
   const Vehicle& vehicle = flights.front().vehicle;
   ep->effect_blocks.fixed = start;

@@ -123,14 +123,15 @@ struct TlsSolution {
   std::string message;            // why it is not usable
   std::vector<std::string> warnings;
   // Discarded parameters whose physics excludes 0 (PositiveByPhysics: kt, kd, the inertia's
-  // diagonal), noise-aware method: not reported (chi and covariance hold 0, as for the other
-  // discarded ones; std is their std in the criterion) but estimated beside the essential ones,
+  // diagonal), noise-aware method: not reported (chi, std and covariance hold 0, as for the other
+  // discarded ones) but estimated beside the essential ones,
   // in the TLS and in the refinement. Held at 0 their signal would stay in the rows and move the
   // parameters whose columns correlate with it: on a take-off flight with little yaw, I_zz w'_z left
   // in the yaw rows moved the first moment through the lateral specific force (c x w' in the
   // accelerometer), and per-rotor thrust scales took its place (docs/method.md 3).
   std::vector<bool> profiled;
   Eigen::VectorXd profiled_chi;  // their estimates, 0 elsewhere (the refinement starts there)
+  Eigen::VectorXd profiled_std;  // and their std (the refinement's scale for them)
   bool Profiled(int k) const { return !profiled.empty() && profiled[k]; }
 };
 
