@@ -112,6 +112,7 @@ Command AddRefineCommand(CLI::App& root) {
     progress.Finish();
     for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
     ExcuseLinearErrorTheRefinementExplains(linear, refined, &checks);
+    for (Check& c : CheckTimingAtHalfCutoff(linear, identify, refined, refine)) checks.push_back(std::move(c));
 
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},
                                      {"tls", TlsOptionsJson(identify.tls)},

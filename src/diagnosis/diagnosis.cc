@@ -17,6 +17,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/refine/refine_checks.h"
 
 namespace rotorid {
 
@@ -348,13 +349,9 @@ std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(HalfCutoffI
 }
 
 // The first kept timing effect (EffectDescriptor::Info::checked_at_half_cutoff) that does not hold
-// at half the low-pass cut-off, marked implausible in `tested`; nullopt when all hold (each then
-// carries both values in `held_at_half_cutoff`, for its verdict). The kept model
-// is refined again on the flights low-passed further to half the cut-off: a true delay or lag acts
-// at every frequency and stays (a simulated 10 ms delay reads 11.0 +- 0.1 ms at 10 Hz, 10.2 +- 0.1
-// at 5 Hz), while one the controller's reply to sensor noise fakes lives between the two cut-offs
-// (a clean take-off flight: 1.06 +- 0.13 ms at 10 Hz, 0.07 +- 0.06 at 4 Hz). It does not hold when
-// it is not significant there (below 3 std) or less than half its size at the cut-off.
+// at half the low-pass cut-off (HoldsAtHalfCutoff), marked implausible in `tested`; nullopt when all
+// hold (each then carries both values in `held_at_half_cutoff`, for its verdict). The kept model is
+// refined again on the flights low-passed further to half the cut-off.
 std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(HalfCutoffIdentification* half_cutoff,
                                                              const std::vector<EffectKind>& kept,
                                                              const RefineResult& at_cutoff,
@@ -377,9 +374,7 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(HalfCutoffIdentific
   for (EffectKind kind : checked) {
     const Eigen::VectorXd value = at_half.effects.Get(kind), std_dev = at_half.effects_std.Get(kind);
     const Eigen::VectorXd full_value = at_cutoff.effects.Get(kind);
-    bool holds = true;
-    for (Eigen::Index k = 0; k < value.size(); ++k)
-      holds = holds && std::abs(value[k]) >= 3.0 * std_dev[k] && std::abs(value[k]) >= 0.5 * std::abs(full_value[k]);
+    const bool holds = HoldsAtHalfCutoff(full_value, value, std_dev);
     std::ostringstream both;
     both << kind->Format(full_value, at_cutoff.effects_std.Get(kind)) << " at the " << observation.filter.cutoff_hz
          << " Hz cut-off, " << kind->Format(value, std_dev) << " at " << half.cutoff_hz << " Hz";

@@ -1,7 +1,9 @@
 #include "rotorid/refine/refine_checks.h"
 
 #include <cmath>
+#include <sstream>
 
+#include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
 
 namespace rotorid {
@@ -86,6 +88,60 @@ void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, 
       check = {check.name, CheckStatus::kWarning,
                "linear: relative error above 100 % (" + linear_above +
                    "): the linear model lacks what the refined effects supply (refined: " + refined_errors + ")"};
+}
+
+bool HoldsAtHalfCutoff(const Eigen::VectorXd& at_cutoff, const Eigen::VectorXd& at_half,
+                       const Eigen::VectorXd& at_half_std) {
+  bool holds = at_half.size() == at_cutoff.size() && at_half_std.size() == at_half.size();
+  for (Eigen::Index k = 0; holds && k < at_half.size(); ++k)
+    holds = std::abs(at_half[k]) >= 3.0 * at_half_std[k] && std::abs(at_half[k]) >= 0.5 * std::abs(at_cutoff[k]);
+  return holds;
+}
+
+std::vector<Check> CheckTimingAtHalfCutoff(const IdentificationResult& linear, const IdentifyOptions& identify,
+                                           const RefineResult& refined, const RefineOptions& options) {
+  // Only a significant estimate can fail to hold: a delay and a lag refined together without the data
+  // to tell them apart have stds of hundreds of ms at the cut-off already.
+  std::vector<EffectKind> checked;
+  for (EffectKind kind : refined.enabled) {
+    const Eigen::ArrayXd value = refined.effects.Get(kind).array().abs();
+    if (kind->info().checked_at_half_cutoff && value.maxCoeff() > 0.0 &&
+        (value >= 3.0 * refined.effects_std.Get(kind).array()).all())
+      checked.push_back(kind);
+  }
+  if (checked.empty()) return {};
+  const char* kName = "timing_at_half_cutoff";
+  const ButterworthOptions& filter = identify.observation.filter;
+  const ButterworthOptions half{filter.order, FilterBand::kLowPass, 0.5 * filter.cutoff_hz, 0.0};
+  std::vector<ProcessedFlight> flights;
+  for (const ProcessedFlight& flight : linear.flights)
+    flights.push_back(LowPassFurther(flight, half, identify.observation.source));
+  RefineOptions again = options;
+  again.effects = refined.enabled;
+  again.initial = refined.effects;
+  again.coarse_delay_search = false;
+  RefineResult at_half;
+  try {
+    at_half = Refine(IdentifyProcessed(std::move(flights), identify), again);
+  } catch (const Error& e) {
+    return {{kName, CheckStatus::kWarning,
+             "the timing effects were not checked at half the cut-off (" + std::string(e.what()) + ")"}};
+  }
+  std::string held, failed;
+  for (EffectKind kind : checked) {
+    const Eigen::VectorXd value = at_half.effects.Get(kind), std_dev = at_half.effects_std.Get(kind);
+    std::ostringstream both;
+    both << kind->parameter_name() << " = " << kind->Format(refined.effects.Get(kind), refined.effects_std.Get(kind))
+         << " at the " << filter.cutoff_hz << " Hz cut-off, " << kind->Format(value, std_dev) << " at "
+         << half.cutoff_hz << " Hz";
+    std::string& list = HoldsAtHalfCutoff(refined.effects.Get(kind), value, std_dev) ? held : failed;
+    list += (list.empty() ? "" : "; ") + both.str();
+  }
+  if (!failed.empty())
+    return {{kName, CheckStatus::kWarning,
+             failed + ": what it fits lies between the two cut-offs, where the rotor signal of a closed-loop "
+                      "flight follows the controller's reply to sensor noise; not a delay of the motors"}};
+  return {{kName, CheckStatus::kOk, "holds at half the low-pass cut-off (" + held + ")"}};
 }
 
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,

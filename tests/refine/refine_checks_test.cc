@@ -4,6 +4,11 @@
 
 #include <limits>
 
+#include "rotorid/sim/presets.h"
+#include "rotorid/sim/simulator.h"
+#include "sim/sim_test_options.h"
+#include "support/test_support.h"
+
 namespace rotorid {
 namespace {
 
@@ -61,6 +66,38 @@ TEST(ExcuseLinearErrorTheRefinementExplains, StaysAnErrorWhenTheRefinedModelFail
   ExcuseLinearErrorTheRefinementExplains(kLinear, RefinedWithErrors({0.1, 0.1, 0.1, 1.0, 1.0, 1.0}), &others);
   EXPECT_EQ(others[0].status, CheckStatus::kError);
   EXPECT_EQ(others[1].status, CheckStatus::kError);
+}
+
+// `refine` checks a delay at half the cut-off as the diagnosis does: on a clean take-off-and-landing
+// flight of A the controller's reply to gyro noise fakes a 1 ms delay at the 10 Hz cut-off that is
+// gone at 5 Hz (a warning); a true 10 ms delay on the same flight holds (ok, both values named).
+TEST(CheckTimingAtHalfCutoff, AFakedDelayIsAWarningAndATrueOneHolds) {
+  if (!testing::kOptimisedBuild) GTEST_SKIP() << "a 60 s flight and four refinements: optimised builds only";
+  auto check = [](double delay_s) {
+    const SimulationVehicle preset = PresetVehicle("A");
+    SimulationOptions sim;
+    sim.duration_s = 60.0;
+    sim.seed = 2;
+    sim.profile = FlightProfile::kTakeoffLanding;
+    sim.effects.Set("delay_s", delay_s);
+    const IdentificationResult linear = testing::IdentifySimulated(Simulate(preset.vehicle, preset.parameters, sim));
+    RefineOptions options;
+    options.effects = {ParseEffectKind("delay")};
+    const RefineResult refined = Refine(linear, options);
+    IdentifyOptions identify;  // as IdentifySimulated identified it
+    identify.allow_partial = true;
+    return CheckTimingAtHalfCutoff(linear, identify, refined, options);
+  };
+  const std::vector<Check> faked = check(0.0);
+  ASSERT_EQ(faked.size(), 1u);
+  EXPECT_EQ(faked[0].name, "timing_at_half_cutoff");
+  EXPECT_EQ(faked[0].status, CheckStatus::kWarning) << faked[0].message;
+  EXPECT_NE(faked[0].message.find("delay_s = "), std::string::npos) << faked[0].message;
+  EXPECT_NE(faked[0].message.find("at 5 Hz"), std::string::npos) << faked[0].message;
+  const std::vector<Check> held = check(0.010);
+  ASSERT_EQ(held.size(), 1u);
+  EXPECT_EQ(held[0].status, CheckStatus::kOk) << held[0].message;
+  EXPECT_NE(held[0].message.find("holds at half the low-pass cut-off"), std::string::npos) << held[0].message;
 }
 
 }  // namespace

@@ -25,6 +25,22 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
 void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
                                             std::vector<Check>* checks);
 
+// Whether a timing effect (EffectDescriptor::Info::checked_at_half_cutoff) refined at the low-pass
+// cut-off (`at_cutoff`) holds when refined again at half of it (`at_half` +- `at_half_std`): a true
+// delay or lag acts at every frequency and stays (a simulated 10 ms delay reads 11.0 +- 0.1 ms at
+// 10 Hz, 10.2 +- 0.1 at 5 Hz), one the controller's reply to sensor noise fakes lives between the two
+// cut-offs (a clean take-off flight: 1.06 +- 0.13 ms at 10 Hz, 0.07 +- 0.06 at 4 Hz). It holds when
+// every coordinate is significant there (3 std) and at least half its size at the cut-off.
+bool HoldsAtHalfCutoff(const Eigen::VectorXd& at_cutoff, const Eigen::VectorXd& at_half,
+                       const Eigen::VectorXd& at_half_std);
+
+// The refinement's timing effects refined again, started at their values, on `linear`'s flights
+// low-passed further to half the cut-off (`identify`: the options `linear` was made with): check
+// "timing_at_half_cutoff", a warning naming those that do not hold (HoldsAtHalfCutoff), ok with
+// both values when all hold; nothing when no timing effect is refined significantly (3 std).
+std::vector<Check> CheckTimingAtHalfCutoff(const IdentificationResult& linear, const IdentifyOptions& identify,
+                                           const RefineResult& refined, const RefineOptions& options);
+
 std::vector<Check> CheckDelay(const IdentificationResult& linear, const DelayEstimate& estimate,
                               const DelayOptions& options);
 
