@@ -140,7 +140,7 @@ std::vector<Check> CheckTimingAtHalfCutoff(const IdentificationResult& linear, c
   if (!failed.empty())
     return {{kName, CheckStatus::kWarning,
              failed + ": what it fits lies between the two cut-offs, where the rotor signal of a closed-loop "
-                      "flight follows the controller's reply to sensor noise; not a delay of the motors"}};
+                      "flight follows the controller's reply to sensor noise, not the motors' timing"}};
   return {{kName, CheckStatus::kOk, "holds at half the low-pass cut-off (" + held + ")"}};
 }
 
