@@ -4,7 +4,6 @@
 #include <array>
 #include <mutex>
 #include <optional>
-#include <sstream>
 
 #include "core/parallel_for.h"
 #include "diagnosis/confounding.h"
@@ -277,11 +276,6 @@ RefineResult RefineOnAllData(const IdentificationResult& full, const std::vector
   return Refine(full, refine);
 }
 
-ButterworthOptions HalfCutoff(const DiagnosisOptions& options) {
-  const ButterworthOptions& filter = options.identify.observation.filter;
-  return {filter.order, FilterBand::kLowPass, 0.5 * filter.cutoff_hz, 0.0};
-}
-
 // The identification flights low-passed further, to half the cut-off, and identified there; made on
 // first use and shared by the final model's timing checks (Get throws rotorid::Error when it fails).
 class HalfCutoffIdentification {
@@ -289,12 +283,7 @@ class HalfCutoffIdentification {
   HalfCutoffIdentification(const IdentificationResult& full, const DiagnosisOptions& options)
       : full_(full), options_(options) {}
   const IdentificationResult& Get() {
-    if (!identified_) {
-      std::vector<ProcessedFlight> flights;
-      for (const ProcessedFlight& flight : full_.flights)
-        flights.push_back(LowPassFurther(flight, HalfCutoff(options_), options_.identify.observation.source));
-      identified_ = IdentifyProcessed(std::move(flights), options_.identify);
-    }
+    if (!identified_) identified_ = IdentifyAtHalfCutoff(full_, options_.identify);
     return *identified_;
   }
 
@@ -328,7 +317,7 @@ std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(HalfCutoffI
     return std::nullopt;
   }
   internal::TimingSeparation separation;
-  separation.cutoff_hz = HalfCutoff(context->options).cutoff_hz;
+  separation.cutoff_hz = HalfCutoff(context->options.identify.observation.filter).cutoff_hz;
   separation.values = std::string(EffectName(selected)) + " = " +
                       selected->Format(joint.effects.Get(selected), joint.effects_std.Get(selected)) + ", " +
                       EffectName(other) + " = " + other->Format(joint.effects.Get(other), joint.effects_std.Get(other));
@@ -349,7 +338,7 @@ std::optional<internal::TimingSeparation> SeparateTimingAtHalfCutoff(HalfCutoffI
 }
 
 // The first kept timing effect (EffectDescriptor::Info::checked_at_half_cutoff) that does not hold
-// at half the low-pass cut-off (HoldsAtHalfCutoff), marked implausible in `tested`; nullopt when all
+// at half the low-pass cut-off (CompareAtHalfCutoff), marked implausible in `tested`; nullopt when all
 // hold (each then carries both values in `held_at_half_cutoff`, for its verdict). The kept model is
 // refined again on the flights low-passed further to half the cut-off.
 std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(HalfCutoffIdentification* half_cutoff,
@@ -361,8 +350,6 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(HalfCutoffIdentific
   for (EffectKind kind : kept)
     if (kind->info().checked_at_half_cutoff) checked.push_back(kind);
   if (checked.empty()) return std::nullopt;
-  const ObservationOptions& observation = context->options.identify.observation;
-  const ButterworthOptions half = HalfCutoff(context->options);
   RefineResult at_half;
   try {
     at_half = RefineOnAllData(half_cutoff->Get(), kept, at_cutoff.effects, context->options);
@@ -372,19 +359,13 @@ std::optional<EffectKind> TimingEffectNotHoldingAtHalfCutoff(HalfCutoffIdentific
     return std::nullopt;
   }
   for (EffectKind kind : checked) {
-    const Eigen::VectorXd value = at_half.effects.Get(kind), std_dev = at_half.effects_std.Get(kind);
-    const Eigen::VectorXd full_value = at_cutoff.effects.Get(kind);
-    const bool holds = HoldsAtHalfCutoff(full_value, value, std_dev);
-    std::ostringstream both;
-    both << kind->Format(full_value, at_cutoff.effects_std.Get(kind)) << " at the " << observation.filter.cutoff_hz
-         << " Hz cut-off, " << kind->Format(value, std_dev) << " at " << half.cutoff_hz << " Hz";
-    if (holds) {
-      (*tested)[kind].held_at_half_cutoff = "holds at half the low-pass cut-off (" + both.str() + ")";
+    const HalfCutoffComparison comparison =
+        CompareAtHalfCutoff(kind, at_cutoff, at_half, context->options.identify.observation.filter.cutoff_hz);
+    if (comparison.holds) {
+      (*tested)[kind].held_at_half_cutoff = "holds at half the low-pass cut-off (" + comparison.values + ")";
       continue;
     }
-    (*tested)[kind].implausible = both.str() +
-                                  ": what it fits lies between the two cut-offs, where the rotor signal of a "
-                                  "closed-loop flight follows the controller's reply to sensor noise";
+    (*tested)[kind].implausible = comparison.values + ": " + kBetweenTheCutoffs;
     return kind;
   }
   return std::nullopt;

@@ -90,12 +90,30 @@ void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, 
                    "): the linear model lacks what the refined effects supply (refined: " + refined_errors + ")"};
 }
 
-bool HoldsAtHalfCutoff(const Eigen::VectorXd& at_cutoff, const Eigen::VectorXd& at_half,
-                       const Eigen::VectorXd& at_half_std) {
-  bool holds = at_half.size() == at_cutoff.size() && at_half_std.size() == at_half.size();
-  for (Eigen::Index k = 0; holds && k < at_half.size(); ++k)
-    holds = std::abs(at_half[k]) >= 3.0 * at_half_std[k] && std::abs(at_half[k]) >= 0.5 * std::abs(at_cutoff[k]);
-  return holds;
+ButterworthOptions HalfCutoff(const ButterworthOptions& filter) {
+  return {filter.order, FilterBand::kLowPass, 0.5 * filter.cutoff_hz, 0.0};
+}
+
+IdentificationResult IdentifyAtHalfCutoff(const IdentificationResult& full, const IdentifyOptions& identify) {
+  std::vector<ProcessedFlight> flights;
+  for (const ProcessedFlight& flight : full.flights)
+    flights.push_back(LowPassFurther(flight, HalfCutoff(identify.observation.filter), identify.observation.source));
+  return IdentifyProcessed(std::move(flights), identify);
+}
+
+HalfCutoffComparison CompareAtHalfCutoff(EffectKind kind, const RefineResult& at_cutoff, const RefineResult& at_half,
+                                         double cutoff_hz) {
+  const Eigen::VectorXd full_value = at_cutoff.effects.Get(kind);
+  const Eigen::VectorXd value = at_half.effects.Get(kind), std_dev = at_half.effects_std.Get(kind);
+  HalfCutoffComparison out;
+  out.holds = value.size() == full_value.size() && std_dev.size() == value.size();
+  for (Eigen::Index k = 0; out.holds && k < value.size(); ++k)
+    out.holds = std::abs(value[k]) >= 3.0 * std_dev[k] && std::abs(value[k]) >= 0.5 * std::abs(full_value[k]);
+  std::ostringstream both;
+  both << kind->Format(full_value, at_cutoff.effects_std.Get(kind)) << " at the " << cutoff_hz << " Hz cut-off, "
+       << kind->Format(value, std_dev) << " at " << 0.5 * cutoff_hz << " Hz";
+  out.values = both.str();
+  return out;
 }
 
 std::vector<Check> CheckTimingAtHalfCutoff(const IdentificationResult& linear, const IdentifyOptions& identify,
@@ -111,36 +129,26 @@ std::vector<Check> CheckTimingAtHalfCutoff(const IdentificationResult& linear, c
   }
   if (checked.empty()) return {};
   const char* kName = "timing_at_half_cutoff";
-  const ButterworthOptions& filter = identify.observation.filter;
-  const ButterworthOptions half{filter.order, FilterBand::kLowPass, 0.5 * filter.cutoff_hz, 0.0};
-  std::vector<ProcessedFlight> flights;
-  for (const ProcessedFlight& flight : linear.flights)
-    flights.push_back(LowPassFurther(flight, half, identify.observation.source));
   RefineOptions again = options;
   again.effects = refined.enabled;
   again.initial = refined.effects;
   again.coarse_delay_search = false;
   RefineResult at_half;
   try {
-    at_half = Refine(IdentifyProcessed(std::move(flights), identify), again);
+    at_half = Refine(IdentifyAtHalfCutoff(linear, identify), again);
   } catch (const Error& e) {
     return {{kName, CheckStatus::kWarning,
              "the timing effects were not checked at half the cut-off (" + std::string(e.what()) + ")"}};
   }
   std::string held, failed;
   for (EffectKind kind : checked) {
-    const Eigen::VectorXd value = at_half.effects.Get(kind), std_dev = at_half.effects_std.Get(kind);
-    std::ostringstream both;
-    both << kind->parameter_name() << " = " << kind->Format(refined.effects.Get(kind), refined.effects_std.Get(kind))
-         << " at the " << filter.cutoff_hz << " Hz cut-off, " << kind->Format(value, std_dev) << " at "
-         << half.cutoff_hz << " Hz";
-    std::string& list = HoldsAtHalfCutoff(refined.effects.Get(kind), value, std_dev) ? held : failed;
-    list += (list.empty() ? "" : "; ") + both.str();
+    const HalfCutoffComparison comparison =
+        CompareAtHalfCutoff(kind, refined, at_half, identify.observation.filter.cutoff_hz);
+    std::string& list = comparison.holds ? held : failed;
+    list += (list.empty() ? "" : "; ") + kind->parameter_name() + " = " + comparison.values;
   }
   if (!failed.empty())
-    return {{kName, CheckStatus::kWarning,
-             failed + ": what it fits lies between the two cut-offs, where the rotor signal of a closed-loop "
-                      "flight follows the controller's reply to sensor noise, not the motors' timing"}};
+    return {{kName, CheckStatus::kWarning, failed + ": " + kBetweenTheCutoffs + ", not the motors' timing"}};
   return {{kName, CheckStatus::kOk, "holds at half the low-pass cut-off (" + held + ")"}};
 }
 

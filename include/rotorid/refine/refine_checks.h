@@ -9,6 +9,7 @@
 #include "rotorid/ident/checks.h"
 #include "rotorid/refine/delay.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/signal/butterworth.h"
 
 namespace rotorid {
 
@@ -25,18 +26,31 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
 void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
                                             std::vector<Check>* checks);
 
-// Whether a timing effect (EffectDescriptor::Info::checked_at_half_cutoff) refined at the low-pass
-// cut-off (`at_cutoff`) holds when refined again at half of it (`at_half` +- `at_half_std`): a true
-// delay or lag acts at every frequency and stays (a simulated 10 ms delay reads 11.0 +- 0.1 ms at
-// 10 Hz, 10.2 +- 0.1 at 5 Hz), one the controller's reply to sensor noise fakes lives between the two
-// cut-offs (a clean take-off flight: 1.06 +- 0.13 ms at 10 Hz, 0.07 +- 0.06 at 4 Hz). It holds when
-// every coordinate is significant there (3 std) and at least half its size at the cut-off.
-bool HoldsAtHalfCutoff(const Eigen::VectorXd& at_cutoff, const Eigen::VectorXd& at_half,
-                       const Eigen::VectorXd& at_half_std);
+// The low-pass filter at half `filter`'s cut-off, and the identification of `full`'s flights
+// low-passed further through it (with the options `full` was made with; throws rotorid::Error).
+ButterworthOptions HalfCutoff(const ButterworthOptions& filter);
+IdentificationResult IdentifyAtHalfCutoff(const IdentificationResult& full, const IdentifyOptions& identify);
+
+// A timing effect (EffectDescriptor::Info::checked_at_half_cutoff) refined at the low-pass cut-off
+// and again at half of it: both values ("<at the cut-off> at the 10 Hz cut-off, <at half> at 5 Hz")
+// and whether it holds. A true delay or lag acts at every frequency and stays (a simulated 10 ms delay
+// reads 11.0 +- 0.1 ms at 10 Hz, 10.2 +- 0.1 at 5 Hz), one the controller's reply to sensor noise
+// fakes lives between the two cut-offs (a clean take-off flight: 1.06 +- 0.13 ms at 10 Hz, 0.07 +-
+// 0.06 at 4 Hz). It holds when every coordinate is significant at half the cut-off (3 std) and at
+// least half its size at the cut-off; `kBetweenTheCutoffs` says why one that does not is no timing.
+struct HalfCutoffComparison {
+  bool holds = false;
+  std::string values;
+};
+HalfCutoffComparison CompareAtHalfCutoff(EffectKind kind, const RefineResult& at_cutoff, const RefineResult& at_half,
+                                         double cutoff_hz);
+inline constexpr const char* kBetweenTheCutoffs =
+    "what it fits lies between the two cut-offs, where the rotor signal of a closed-loop flight follows the "
+    "controller's reply to sensor noise";
 
 // The refinement's timing effects refined again, started at their values, on `linear`'s flights
 // low-passed further to half the cut-off (`identify`: the options `linear` was made with): check
-// "timing_at_half_cutoff", a warning naming those that do not hold (HoldsAtHalfCutoff), ok with
+// "timing_at_half_cutoff", a warning naming those that do not hold (CompareAtHalfCutoff), ok with
 // both values when all hold; nothing when no timing effect is refined significantly (3 std).
 std::vector<Check> CheckTimingAtHalfCutoff(const IdentificationResult& linear, const IdentifyOptions& identify,
                                            const RefineResult& refined, const RefineOptions& options);
