@@ -82,6 +82,7 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
       note << "; its size is not determined (every coordinate within 2 std of zero): the flights fix what it "
               "removes, not its value";
     if (!v.held_at_half_cutoff.empty()) note << "; " << v.held_at_half_cutoff;
+    if (!v.unstated_reference.empty()) note << "; " << v.unstated_reference;
   } else if (v.status == "implausible") {
     note << "implausible: absorbs something else; " << v.implausible << " (its held-out shrink of " << std::fixed
          << std::setprecision(1) << v.test.shrink_pct << " % on top of " << Join(v.tested_on_top_of)

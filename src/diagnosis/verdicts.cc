@@ -142,6 +142,7 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
     v.negligible = t->second.negligible;
   }
   if (tested && v.selected) v.held_at_half_cutoff = t->second.held_at_half_cutoff;
+  if (v.selected) v.unstated_reference = kind->UnstatedReference(v.value, context.vehicle);
   ApplyKeptStep(outcome.steps, &v);
   ApplyDropped(context, outcome.backward.dropped, &v);
   if (!v.selected) v.unscored = UnscoredStatement(outcome.linearization, kind);

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "model/effect_adapter.h"
+#include "rotorid/core/text.h"
 #include "rotorid/core/vehicle.h"
 
 namespace rotorid::internal {
@@ -56,6 +57,17 @@ const EffectDescriptor& RotorDragEffect() {
     i.settle_tolerance = 1e-8;
     i.display_unit = "N s/m per rad/s";
     i.inputs = {FlightInput::kVelocity};
+    // Measured: on the circle with the IMU 30 mm below O_d and the vehicle file silent, k_f read 7.20e-6
+    // for 6e-6 and k_d 4e-5, i.e. k_f - k_d r_z (docs/adding_an_effect.md, "k_f and the IMU's height").
+    i.relative_to_known = "imu_lever_arm";
+    i.reads_without_it = [](const Eigen::VectorXd& value) {
+      const double per_mm = value[0] * 1e-3;
+      return "flapping_moment_coefficient is measured about the IMU's height: it reads k_f - k_d r_z, with r_z "
+             "the IMU's height above O_d (z up), which the vehicle file does not give (imu_position: [x, y, z]); "
+             "each mm of r_z moves it by k_d x 1 mm = " +
+             ShortNumber(per_mm) +
+             (value[1] > 0.0 ? " (" + ShortNumber(100.0 * per_mm / value[1]) + " % of its value)" : std::string());
+    };
     return i;
   }());
   return effect;

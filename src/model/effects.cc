@@ -203,6 +203,11 @@ std::string EffectDescriptor::Implausible(const Eigen::VectorXd& value, const Ei
   return {};
 }
 
+std::string EffectDescriptor::UnstatedReference(const Eigen::VectorXd& value, const Vehicle& vehicle) const {
+  if (info_.relative_to_known.empty() || vehicle.known_effects.count(info_.relative_to_known) > 0) return "";
+  return info_.reads_without_it(value);
+}
+
 std::string EffectDescriptor::Negligible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const {
   const PlausibleRange& range = info_.plausible;
   const double floor = info_.negligible.below;

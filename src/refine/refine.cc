@@ -969,6 +969,15 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
                                 "only as a roll-pitch coupling (X layout: what I_xy does) or as roll against pitch "
                                 "gain (+ layout: what I_xx / I_yy do)");
     }
+  // Estimates relative to a known value the vehicle file leaves out (rotor_drag's k_f and the IMU's height).
+  for (EffectKind kind : result.enabled)
+    for (const ProcessedFlight& flight : linear.flights) {
+      const std::string reads = kind->UnstatedReference(result.effects.Get(kind), flight.vehicle);
+      if (!reads.empty()) {
+        result.warnings.push_back(reads);
+        break;
+      }
+    }
   const auto tied_by_pins = [&](int a, int b) {
     return std::any_of(pinned_prefixes.begin(), pinned_prefixes.end(), [&](const std::string& prefix) {
       return result.effect_labels[a].rfind(prefix, 0) == 0 && result.effect_labels[b].rfind(prefix, 0) == 0;

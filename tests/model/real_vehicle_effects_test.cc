@@ -19,6 +19,7 @@
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
 #include "rotorid/sim/truth.h"
+#include "sim/sim_test_options.h"
 #include "support/test_support.h"
 
 namespace rotorid {
@@ -221,6 +222,44 @@ INSTANTIATE_TEST_SUITE_P(
                       SimulatedCase{"acc_delay", Values({0.005}), 0.001},
                       SimulatedCase{"ground_effect", Values({1.0}), 0.2, 0.3}),
     [](const auto& test_info) { return test_info.param.effect; });
+
+// The flapping coefficient is measured about the IMU's height: the force rows see only ms_z - m r_z,
+// and the drag force's moment about the centre of mass follows that ms_z. With the IMU 30 mm below
+// O_d on the circle, k_f reads k_f - k_d r_z (7.2e-6 for 6e-6) and the refinement says so; with the
+// vehicle file's imu_position it reads k_f, without the warning.
+TEST(RotorDragTest, FlappingCoefficientIsMeasuredAboutTheImuHeight) {
+  if (!testing::kOptimisedBuild) GTEST_SKIP() << "two 60 s refinements: optimised builds only";
+  const double kd = 4e-5, kf = 6e-6, imu_z = -0.03;
+  const SimulationVehicle preset = PresetVehicle("A");
+  SimulationOptions options;
+  options.duration_s = 60.0;
+  options.seed = 1;
+  options.mocap = true;
+  options.profile = FlightProfile::kCircle;
+  options.circle_radius_m = 3.0;
+  options.circle_speed_mps = 3.0;
+  options.effects.Set(Kind("rotor_drag"), Values({kd, kf}));
+  options.effects.Set(Kind("imu_lever_arm"), Values({0.0, 0.0, imu_z}));
+  SimulationResult sim = Simulate(preset.vehicle, preset.parameters, options);
+  auto flapping_warning = [](const RefineResult& refined) {
+    return std::count_if(refined.warnings.begin(), refined.warnings.end(), [](const std::string& w) {
+      return w.find("flapping_moment_coefficient is measured about the IMU's height") != std::string::npos;
+    });
+  };
+
+  const RefineResult silent = RefineWith(testing::IdentifySimulated(sim), {"rotor_drag"});
+  const Eigen::VectorXd about_imu = silent.effects.Get(Kind("rotor_drag"));
+  EXPECT_NEAR(about_imu[0], kd, 0.01 * kd);
+  EXPECT_NEAR(about_imu[1], kf - kd * imu_z, 0.01 * kf);
+  EXPECT_EQ(flapping_warning(silent), 1);
+
+  sim.vehicle.known_effects["imu_lever_arm"] = Values({0.0, 0.0, imu_z});
+  const RefineResult given = RefineWith(testing::IdentifySimulated(sim), {"rotor_drag"});
+  const Eigen::VectorXd about_o_d = given.effects.Get(Kind("rotor_drag"));
+  EXPECT_NEAR(about_o_d[0], kd, 0.01 * kd);
+  EXPECT_NEAR(about_o_d[1], kf, 0.01 * kf);
+  EXPECT_EQ(flapping_warning(given), 0);
+}
 
 // The linear identification of `base`.csv with its vehicle `base`.yaml, partial results allowed.
 IdentificationResult IdentifyAllowingPartial(const std::string& base) {

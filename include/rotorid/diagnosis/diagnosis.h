@@ -169,6 +169,9 @@ struct EffectVerdict {
   // Selected delay or motor lag: its value refitted at half the low-pass cut-off, where a true one
   // holds and one the controller's reply to sensor noise fakes vanishes (also in `note`).
   std::string held_at_half_cutoff;
+  // Selected, and its value is relative to a known value the vehicle file does not give
+  // (EffectDescriptor::UnstatedReference: rotor_drag's k_f and the IMU's height; also in `note`).
+  std::string unstated_reference;
   // Not selected, and most of its signature falls in a component no test scores (Mz when the linear
   // identification discarded kd): why this data cannot rule it out (also in `note`).
   std::string unscored;

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -222,6 +223,13 @@ class EffectDescriptor {
     // + quad, what I_xx / I_yy do). Without kd among the free parameters it is held at 0
     // (HeldDirections).
     bool spin_pattern_needs_kd = false;
+    // A known value of another effect (its name: "imu_lever_arm", given by its vehicle_key) that the
+    // estimate is relative to, and what the estimate reads when the vehicle file does not give it:
+    // rotor_drag's flapping coefficient is measured about the IMU's height, because the force rows
+    // see only ms_z - m r_z and the drag force's moment about the centre of mass follows that ms_z.
+    // A flight cannot tell them apart (docs/adding_an_effect.md, "Why r_z is hard").
+    std::string relative_to_known;
+    std::function<std::string(const Eigen::VectorXd& value)> reads_without_it;
   };
 
   explicit EffectDescriptor(Info info) : info_(std::move(info)) {}
@@ -262,6 +270,9 @@ class EffectDescriptor {
   // Empty unless the estimate's free coordinates, 3 std included, lie below the size that matters
   // (Info::negligible); else the value, that size, and why.
   std::string Negligible(const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) const;
+  // Empty unless Info::relative_to_known is set and `vehicle`'s file does not give that effect's
+  // value; else what `value` then reads (Info::reads_without_it).
+  std::string UnstatedReference(const Eigen::VectorXd& value, const Vehicle& vehicle) const;
   // Clamps a value into the physical bounds.
   Eigen::VectorXd Clamp(const Eigen::VectorXd& value) const;
 
