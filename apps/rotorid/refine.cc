@@ -111,7 +111,7 @@ Command AddRefineCommand(CLI::App& root) {
     const RefineResult refined = Refine(linear, refine, [&progress](int done, int) { progress.Update(done); });
     progress.Finish();
     for (Check& c : CheckRefinement(linear, refined)) checks.push_back(std::move(c));
-    ExcuseLinearErrorTheRefinementExplains(linear, refined, &checks);
+    ExcuseLinearErrorsTheRefinementExplains(linear, refined, &checks);
     for (Check& c : CheckTimingAtHalfCutoff(linear, identify, refined, refine)) checks.push_back(std::move(c));
 
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(identify.observation)},

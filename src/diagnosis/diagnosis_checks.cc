@@ -36,7 +36,10 @@ std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<
     for (Check& c : more) checks.push_back(std::move(c));
   };
   if (!diagnosis.final_model.empty()) {
-    append(CheckParameters(Checked(diagnosis.final_parameters, diagnosis.final_parameter_std), configs, "final"));
+    std::vector<Check> final_checks =
+        CheckParameters(Checked(diagnosis.final_parameters, diagnosis.final_parameter_std), configs, "final");
+    ExcuseLinearParameterErrors(std::vector<Check>(checks), final_checks, &checks);
+    append(std::move(final_checks));
     bool finite = true;
     for (EffectKind kind : diagnosis.final_model)
       finite =

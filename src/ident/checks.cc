@@ -499,6 +499,30 @@ std::vector<Check> CheckRelativeError(const std::vector<std::optional<double>>& 
   return {{"relative_error", CheckStatus::kOk, label + ": every relative error at most 100 %"}};
 }
 
+void ExcuseLinearParameterErrors(const std::vector<Check>& linear, const std::vector<Check>& with_effects,
+                                 std::vector<Check>* checks) {
+  // The n-th check named `name` in `list`, or null.
+  const auto nth = [](const std::vector<Check>& list, const std::string& name, int n) -> const Check* {
+    for (const Check& c : list)
+      if (c.name == name && n-- == 0) return &c;
+    return nullptr;
+  };
+  std::map<std::string, int> seen;
+  for (const Check& failed : linear) {
+    const int n = seen[failed.name]++;
+    if (failed.status != CheckStatus::kError ||
+        (failed.name != "kt_positive" && failed.name != "kd_positive" && failed.name != "inertia"))
+      continue;
+    const Check* passed = nth(with_effects, failed.name, n);
+    if (!passed || passed->status != CheckStatus::kOk) continue;
+    for (Check& c : *checks)
+      if (c.name == failed.name && c.status == CheckStatus::kError && c.message == failed.message)
+        c = {c.name, CheckStatus::kWarning,
+             c.message + "; the model with effects passes this check (" + passed->message +
+                 "): the linear model lacks what they supply"};
+  }
+}
+
 int IdentifySteps(const std::vector<FlightData>& flights) { return static_cast<int>(flights.size()) + 2; }
 
 IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const IdentifyOptions& options,

@@ -63,18 +63,9 @@ std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, co
   return checks;
 }
 
-}  // namespace
-
-std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
-                                   const std::string& label, CheckStatus on_bound_status) {
-  std::vector<Check> checks = RefinedParameterChecks(linear, refined, label);
-  Append(&checks, EffectChecks(refined, label, on_bound_status));
-  Append(&checks, CheckRelativeError(refined.relative_error_pct, label, /*held_out=*/false));
-  return checks;
-}
-
-void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
-                                            std::vector<Check>* checks) {
+// The relative-error part of ExcuseLinearErrorsTheRefinementExplains.
+void ExcuseLinearRelativeError(const IdentificationResult& linear, const RefineResult& refined,
+                               std::vector<Check>* checks) {
   for (const std::optional<double>& e : refined.relative_error_pct)
     if (e && !(*e <= 100.0)) return;  // above 100 % or not finite: the refined model does not explain it either
   for (const std::optional<double>& e : linear.relative_error_pct)
@@ -88,6 +79,24 @@ void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, 
       check = {check.name, CheckStatus::kWarning,
                "linear: relative error above 100 % (" + linear_above +
                    "): the linear model lacks what the refined effects supply (refined: " + refined_errors + ")"};
+}
+
+}  // namespace
+
+std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
+                                   const std::string& label, CheckStatus on_bound_status) {
+  std::vector<Check> checks = RefinedParameterChecks(linear, refined, label);
+  Append(&checks, EffectChecks(refined, label, on_bound_status));
+  Append(&checks, CheckRelativeError(refined.relative_error_pct, label, /*held_out=*/false));
+  return checks;
+}
+
+void ExcuseLinearErrorsTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
+                                             std::vector<Check>* checks) {
+  ExcuseLinearParameterErrors(
+      CheckParameters(CheckedFromSolution(linear.system, linear.solution), linear.system.config_names, "linear"),
+      RefinedParameterChecks(linear, refined, "refined"), checks);
+  ExcuseLinearRelativeError(linear, refined, checks);
 }
 
 ButterworthOptions HalfCutoff(const ButterworthOptions& filter) {

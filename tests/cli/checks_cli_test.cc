@@ -323,5 +323,51 @@ TEST(Checks, TooLargeIzzWithKdNamesTheYawScale) {
   EXPECT_EQ(both.find("yaw motion"), std::string::npos) << both;
 }
 
+// The same take-off flight of A refined with the ground effect its linear model lacks: I_zz 0.0332
+// +- 0.0008, kd 5.85e-8 (truth 0.029, 5.1e-8). The linear inertia error becomes a warning that says
+// the model with effects passes; it stays an error when that model fails the same check, and each
+// configuration's check is paired with that configuration's.
+TEST(Checks, LinearInertiaErrorTheModelWithEffectsPassesIsAWarning) {
+  CheckedParameters linear;
+  linear.value = {{"kt", 3.67e-6}, {"kd", 1.25e-7}, {"A.I_xx", 0.0173}, {"A.I_yy", 0.0183}, {"A.I_zz", 0.0711}};
+  linear.std = {{"kt", 1.3e-8}, {"kd", 1.25e-8}, {"A.I_xx", 1.9e-4}, {"A.I_yy", 1.8e-4}, {"A.I_zz", 7.1e-3}};
+  for (const auto& [name, value] : linear.value) linear.essential[name] = true;
+  CheckedParameters refined = linear;
+  refined.value["kd"] = 5.85e-8;
+  refined.value["A.I_zz"] = 0.0332;
+  refined.std["A.I_zz"] = 8.5e-4;
+  const std::vector<Check> linear_checks = CheckParameters(linear, {"A"}, "linear");
+  ASSERT_TRUE(AnyCheckFailed(linear_checks));
+
+  std::vector<Check> checks = linear_checks;
+  ExcuseLinearParameterErrors(linear_checks, CheckParameters(refined, {"A"}, "refined"), &checks);
+  EXPECT_FALSE(AnyCheckFailed(checks));
+  const auto inertia = std::find_if(checks.begin(), checks.end(), [](const Check& c) { return c.name == "inertia"; });
+  ASSERT_NE(inertia, checks.end());
+  EXPECT_EQ(inertia->status, CheckStatus::kWarning);
+  EXPECT_NE(inertia->message.find("too little yaw motion"), std::string::npos) << inertia->message;
+  EXPECT_NE(inertia->message.find("the model with effects passes this check (refined A: positive definite"),
+            std::string::npos)
+      << inertia->message;
+
+  refined.value["A.I_zz"] = 0.05;  // I_xx + I_yy < I_zz in the refined model too
+  checks = linear_checks;
+  ExcuseLinearParameterErrors(linear_checks, CheckParameters(refined, {"A"}, "refined"), &checks);
+  EXPECT_TRUE(AnyCheckFailed(checks));
+
+  // Two configurations: A fails in both models, B passes in both; A's error stays.
+  for (const char* n : {"I_xx", "I_yy", "I_zz"}) {
+    linear.value[std::string("B.") + n] = 0.02;
+    linear.std[std::string("B.") + n] = 1e-4;
+    linear.essential[std::string("B.") + n] = true;
+  }
+  refined = linear;
+  const std::vector<Check> two = CheckParameters(linear, {"A", "B"}, "linear");
+  checks = two;
+  ExcuseLinearParameterErrors(two, CheckParameters(refined, {"A", "B"}, "refined"), &checks);
+  EXPECT_TRUE(AnyCheckFailed(checks));
+  EXPECT_NE(FailedCheckMessages(checks).find("linear A inertia is not physical"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace rotorid

@@ -19,12 +19,13 @@ namespace rotorid {
 std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
                                    const std::string& label = "refined",
                                    CheckStatus on_bound_status = CheckStatus::kError);
-// The linear step's Table III error above 100 % is what an effect the linear model lacks gives (an
-// IMU lever arm's centripetal acceleration on a yaw spin: 763-988 % in roll and pitch). When every
-// error of the refined model is within 100 %, the refinement explains it: that check of `checks`
+// The linear step's errors that an effect the linear model lacks gives, where the refined model
+// passes: Table III above 100 % (an IMU lever arm's centripetal acceleration on a yaw spin: 763-988 %
+// in roll and pitch) when every refined error is within 100 %, and a parameter check the refined
+// parameters pass (ExcuseLinearParameterErrors: a non-physical inertia). Each such check of `checks`
 // becomes a warning that says so, and the refined model's own checks decide the exit.
-void ExcuseLinearErrorTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
-                                            std::vector<Check>* checks);
+void ExcuseLinearErrorsTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
+                                             std::vector<Check>* checks);
 
 // The low-pass filter at half `filter`'s cut-off, and the identification of `full`'s flights
 // low-passed further through it (with the options `full` was made with; throws rotorid::Error).
