@@ -3,7 +3,9 @@
 tolerances: one line, truth -> estimate +- std per coordinate of every enabled effect, `ok` when
 all are within (lever arm 2 mm or 3 std, acc_delay 1 ms, drag coefficients 10 %, rotor inertia
 15 %, thrust scales 0.01, battery exponent 0.1, ground-effect coefficient 20 %, motor lag and delay
-10 %), then kt's error and, when given, the run time. bench/diagnosis_check.py judges a diagnosis
+10 %), then kt's error and, when given, the run time. When rotorid says k_f is measured about the
+IMU's height (rotor drag with the IMU off O_d's height and no imu_position in the vehicle file), the
+line also compares k_f - k_d r_z, what a flight can give. bench/diagnosis_check.py judges a diagnosis
 with the same tolerances (`judge_effect`).
 
     effect_check.py LABEL REPORT TRUTH [SECONDS]
@@ -47,6 +49,19 @@ def judge_effect(key, value, std, want, held_labels=None):
     return ok, parts
 
 
+def about_imu_height(report, truth):
+    """When rotorid says k_f is measured about the IMU's height (the vehicle file leaves imu_position out)
+    and the truth has the IMU off O_d's height: k_f - k_d r_z, what a flight can give, against the estimate."""
+    flapping = report["refined"]["effects"].get("flapping_moment_coefficient", {})
+    arm = truth["effects"].get("imu_position_m") or [0.0, 0.0, 0.0]
+    said = any("measured about the IMU's height" in w for w in report["refined"].get("warnings", []))
+    if not flapping.get("enabled") or not said or arm[2] == 0.0:
+        return ""
+    want = truth["effects"]["flapping_moment_coefficient"] - truth["effects"]["rotor_drag_coefficient"] * arm[2]
+    got = flapping["value"]
+    return f"; about the IMU's height k_f - k_d r_z {want:.4g} -> {got:.4g} ({100 * (got / want - 1):+.1f} %)"
+
+
 def read_arguments():
     """(label, report, truth, seconds) from LABEL REPORT TRUTH [SECONDS]; report None if unreadable."""
     label, report, truth_path = sys.argv[1:4]
@@ -67,7 +82,7 @@ def main():
         if entry.get("enabled"):
             good, text = judge_effect(key, entry["value"], entry["std"], t["effects"].get(key), entry.get("held"))
             ok, parts = ok and good, parts + text
-    tail = ""
+    tail = about_imu_height(r, t)
     kt_true = t.get("parameters", {}).get("kt")
     if kt_true:
         tail += f"; kt {100 * (r['refined']['parameters']['kt']['value'] / kt_true - 1):+.2f} %"
