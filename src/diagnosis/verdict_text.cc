@@ -226,6 +226,7 @@ std::string WhichText(const Diagnosis& d) {
           << FormatEffectMagnitude(v.kind, v.value, v.std) << " (F = " << std::setprecision(1) << v.test.f_statistic
           << ", p = " << std::scientific << std::setprecision(1) << v.test.p_value << std::fixed
           << "; held-out gap shrinks " << std::setprecision(1) << v.test.shrink_pct << " %)\n";
+      if (!v.unstated_reference.empty()) out << "       " << v.unstated_reference << "\n";
     }
   }
   for (const ConfoundedEffects& c : d.confounded) {
@@ -258,14 +259,20 @@ std::string HowFarText(const Diagnosis& d) {
     }
     out << "  (noise floor ";
     value(d.baseline.noise_floor_pct[c]);
+    out << ")\n";
     // Each gap divides by its own model's rotor wrench, which an effect can change (per-rotor thrust
-    // scales cancel a static moment that the baseline's first moment balanced): the residual itself
-    // is the comparison that no divisor moves.
-    const Eigen::Matrix<double, 6, 1>& last =
-        d.steps.empty() ? d.baseline.residual_rms : d.steps.back().after.residual_rms;
-    out << std::scientific << std::setprecision(2) << "; residual " << d.baseline.residual_rms[c];
-    if (!d.steps.empty()) out << " -> " << last[c];
-    out << (c < 3 ? " N" : " N m") << std::fixed << ")\n";
+    // scales cancel a static moment that the baseline's first moment balanced: jana01's My read 8.4 ->
+    // 33.3 % while its residual fell by a third): the residual itself is the comparison that no
+    // divisor moves, so each step's is printed too.
+    if (d.steps.empty()) continue;
+    out << "          residual " << std::scientific << std::setprecision(2) << d.baseline.residual_rms[c];
+    for (const SelectionStep& step : d.steps) out << " -> " << step.after.residual_rms[c];
+    const double last = d.steps.back().after.residual_rms[c];
+    out << (c < 3 ? " N" : " N m") << std::fixed;
+    if (d.baseline.residual_rms[c] > 0.0)
+      out << " (" << std::showpos << std::setprecision(0) << 100.0 * (last / d.baseline.residual_rms[c] - 1.0)
+          << std::noshowpos << " %)";
+    out << "\n";
   }
   return out.str();
 }
