@@ -166,10 +166,14 @@ json DiagnosisJson(const Diagnosis& d) {
     steps.push_back({{"added", EffectName(s.added)},
                      {"shrink_pct", s.test.shrink_pct},
                      {"test", TestJson(s.test)},
-                     {"before", {{"relative_error_pct", Components(s.before.relative_error_pct)},
-                                 {"gap_pct", Components(s.before.gap_pct)}}},
-                     {"after", {{"relative_error_pct", Components(s.after.relative_error_pct)},
-                                {"gap_pct", Components(s.after.gap_pct)}}}});
+                     {"before",
+                      {{"relative_error_pct", Components(s.before.relative_error_pct)},
+                       {"gap_pct", Components(s.before.gap_pct)},
+                       {"residual_rms", Components(s.before.residual_rms)}}},
+                     {"after",
+                      {{"relative_error_pct", Components(s.after.relative_error_pct)},
+                       {"gap_pct", Components(s.after.gap_pct)},
+                       {"residual_rms", Components(s.after.residual_rms)}}}});
   json confounded = json::array();
   for (const ConfoundedEffects& c : d.confounded)
     confounded.push_back({{"effects", {EffectName(c.selected), EffectName(c.other)}},

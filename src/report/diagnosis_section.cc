@@ -109,20 +109,26 @@ std::string GapTables(const Diagnosis& d) {
       "<p>The same gap split into what sensor noise alone explains (noise floor) and the rest, the model error "
       "(Fx, Fy against the thrust, in %):</p>\n<table id=\"diagnosis_noise\"><thead><tr><th>held-out gap (%)</th>" +
       ComponentHeader(kAllComponents) + "</tr></thead><tbody>\n" + split + "</tbody></table>\n";
-  const std::pair<const char*, const HeldOutGap*> models[] = {{"linear model", &baseline},
-                                                              {"with the selected effects", &final_gap}};
+  // Each gap divides by its own model's rotor wrench, which an effect can change (thrust scales cancel a
+  // static moment): the residual after each step is the comparison no divisor moves.
   std::string rms;
-  for (const auto& [label, gap] : models) {
-    rms += std::string("<tr><td>") + label + "</td>";
-    for (const int c : kAllComponents)
-      rms += "<td class=\"num\">" + FormatValue("%.4g", gap->residual_rms[c]) + "</td>";
+  auto rms_row = [&](const std::string& label, const HeldOutGap& gap, const char* cls = "") {
+    rms += std::string("<tr") + (*cls ? std::string(" class=\"") + cls + "\"" : "") + "><td>" + label + "</td>";
+    for (const int c : kAllComponents) rms += "<td class=\"num\">" + FormatValue("%.4g", gap.residual_rms[c]) + "</td>";
     rms += "</tr>\n";
-  }
+  };
+  rms_row("linear model (baseline)", baseline);
+  for (const SelectionStep& step : d.steps) rms_row("+ <code>" + Html(EffectName(step.added)) + "</code>", step.after);
+  rms_row("with the selected effects (final)", final_gap, "total");
   std::string header;
   for (const int c : kAllComponents)
     header += "<th class=\"num\">" + std::string(kWrenchComponentNames[c]) + " (" + ComponentUnit(c) + ")</th>";
-  html += "<table id=\"diagnosis_rms\"><thead><tr><th>held-out residual RMS</th>" + header + "</tr></thead><tbody>\n" +
-          rms + "</tbody></table>\n";
+  html +=
+      "<p>Each gap above divides by its own model's rotor wrench, which an effect can change (per-rotor thrust scales "
+      "cancel a static moment that the baseline's first moment balanced); the held-out residual itself, after each "
+      "step, is the comparison no divisor moves:</p>\n"
+      "<table id=\"diagnosis_rms\"><thead><tr><th>held-out residual RMS</th>" +
+      header + "</tr></thead><tbody>\n" + rms + "</tbody></table>\n";
   return html;
 }
 

@@ -397,6 +397,18 @@ TEST_F(HtmlReportTest, DiagnoseReportGivesTheVerdictFirstAndTablesEqualToTheJson
   expect_row(gap.front(), report["baseline"]["relative_error_pct"]);
   expect_row(gap[1], report["steps"][0]["after"]["relative_error_pct"]);
   expect_row(gap.back(), report["final"]["relative_error_pct"]);
+  // The held-out residual in physical units after each step too: the comparison no divisor moves.
+  const auto rms = TableCells(html, "diagnosis_rms");
+  ASSERT_EQ(rms.size(), gap.size());
+  auto expect_rms = [](const std::vector<std::string>& row, const json& values) {
+    for (int c = 0; c < 6; ++c) {
+      const double v = values[kWrenchComponentNames[c]].get<double>();
+      EXPECT_NEAR(CellNumber(row[c + 1]), v, 1e-3 * v) << kWrenchComponentNames[c];
+    }
+  };
+  expect_rms(rms.front(), report["baseline"]["residual_rms"]);
+  expect_rms(rms[1], report["steps"][0]["after"]["residual_rms"]);
+  expect_rms(rms.back(), report["final"]["residual_rms"]);
   // Where: one row per band with the where-component's residual before and after, in its unit.
   const std::string component = report["where"]["component"].get<std::string>();
   const auto bands = TableCells(html, "diagnosis_bands");
