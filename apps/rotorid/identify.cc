@@ -54,7 +54,7 @@ Command AddIdentifyCommand(CLI::App& root) {
     input.linear = &result;
     input.checks = checks;
     input.flights = ReportFlights(result.flights, false);
-    input.parameter_sets = {{"linear", NamedParameters(result.system, result.solution.chi), Effects()}};
+    input.parameter_sets = {{"linear", NamedParameters(result.system, PredictionChi(result.solution)), Effects()}};
     const std::string report_path = WriteCommandReport(options->flights, input);
     if (!options->flights.quiet) {
       std::cout << "rotorid identify: " << TlsMethodName(identify.tls.method) << " TLS, "

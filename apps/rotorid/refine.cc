@@ -125,8 +125,8 @@ Command AddRefineCommand(CLI::App& root) {
                              {"refined", RefinedJson(linear, refined)}};
     std::vector<std::optional<double>> held_out_linear, held_out_refined;
     std::vector<ProcessedFlight> held_out;
-    std::map<std::string, double> linear_values = NamedParameters(linear.system, linear.solution.chi);
-    std::map<std::string, double> refined_values = NamedParameters(linear.system, refined.refined.chi);
+    std::map<std::string, double> linear_values = NamedParameters(linear.system, PredictionChi(linear.solution));
+    std::map<std::string, double> refined_values = NamedParameters(linear.system, PredictionChi(refined.refined));
     if (!options->flights.validate_log_paths.empty()) {
       held_out = ProcessFlights(validation.flights, identify.observation);
       // Per-flight first moments: each held-out flight's is fitted, for either parameter set.

@@ -38,7 +38,8 @@ Command AddValidateCommand(CLI::App& root) {
     if (const std::string problem = source.Validate(); !problem.empty()) throw UsageError(problem);
     const LoadedFlights loaded = LoadTrainingFlights(options->flights, source);
     const nlohmann::json params = ReadJsonFile(options->params_path);
-    std::map<std::string, double> values = ParameterValuesFromReport(params, options->params_path, options->block);
+    std::map<std::string, double> values =
+        ParameterValuesFromReport(params, options->params_path, options->block, /*predicted=*/true);
     // Rows are built exactly as in the run that produced the parameters.
     const ObservationOptions observation = ObservationOptionsFromJson(
         params.contains("settings") && params["settings"].contains("observation") ? params["settings"]["observation"]

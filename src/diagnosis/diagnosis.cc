@@ -72,7 +72,8 @@ class HeldOutEvaluator : public internal::ModelFitter {
     ModelRecord record;
     for (int k = 0; k < num_folds(); ++k) {
       record.fold_effects.push_back(Effects{});
-      record.fold_parameters.push_back(NamedParameters(fold_linear_[k].system, fold_linear_[k].solution.chi));
+      record.fold_parameters.push_back(
+          NamedParameters(fold_linear_[k].system, PredictionChi(fold_linear_[k].solution)));
     }
     EvaluateHeldOut(&record);
     scored_.clear();
@@ -119,7 +120,7 @@ class HeldOutEvaluator : public internal::ModelFitter {
         refine.reselect_essential = options_.reselect_essential;
         const RefineResult result = Refine(fold_linear_[k], refine);
         records[m].fold_effects[k] = result.effects;
-        records[m].fold_parameters[k] = NamedParameters(fold_linear_[k].system, result.refined.chi);
+        records[m].fold_parameters[k] = NamedParameters(fold_linear_[k].system, PredictionChi(result.refined));
       } catch (const std::exception& e) {
         errors[task] = e.what();
       }
@@ -400,7 +401,8 @@ bool SeparatedTimingTwin(HalfCutoffIdentification* at_half, const Effects& final
 // all data runs off (an IMU lever arm to its 300 mm bound on top of an acc bias, a z acc bias to its
 // 2 m/s^2 bound on a PWM-driven Crazyflie): a clipped value is not an estimate.
 struct FinalModel {
-  std::map<std::string, double> parameters;
+  std::map<std::string, double> parameters;     // reported (discarded: 0)
+  std::map<std::string, double> predicted;      // what it predicts with (PredictionChi)
   std::map<std::string, double> parameter_std;  // empty: not known
   Effects effects;
   internal::EffectLinearization linearization;
@@ -413,6 +415,7 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
   for (EffectMask previous = internal::MaskOf(*kept);;) {
     FinalModel model;
     model.parameters = all_data.parameters;
+    model.predicted = all_data.predicted;
     model.parameter_std = NamedParameters(all_data.linear.system, all_data.linear.solution.std);
     const EffectMask mask = internal::MaskOf(*kept);
     internal::EnsureFitted(context, {mask}, previous);  // the folds warm-start the fit on all data
@@ -428,13 +431,13 @@ FinalModel FitFinalModel(const internal::AllDataModel& all_data, internal::Selec
                                context->options);
       model.effects = result.effects;
       model.parameters = NamedParameters(all_data.linear.system, result.refined.chi);
+      model.predicted = NamedParameters(all_data.linear.system, PredictionChi(result.refined));
       model.parameter_std.clear();
       if (result.has_covariance) model.parameter_std = NamedParameters(all_data.linear.system, result.refined.std);
       on_bound = result.on_bound;
     }
-    model.linearization =
-        internal::LinearizeEffects(all_data.linear.flights, model.parameters, all_data.free_parameters, model.effects,
-                                   context->options.candidates);
+    model.linearization = internal::LinearizeEffects(all_data.linear.flights, model.predicted, all_data.free_parameters,
+                                                     model.effects, context->options.candidates);
     model.kept_fit = internal::FitEffectSubset(model.linearization, KindsOf(mask));
     const auto rejected = std::find_if(kept->begin(), kept->end(), [&](EffectKind kind) {
       internal::TestedCandidate& t = (*tested)[kind];
@@ -498,7 +501,9 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   timer.Mark("held-out baseline");
 
   // Which: forward selection on held-out data, then the backward pass.
-  const internal::AllDataModel all_data{full, diagnosis.linear_parameters, internal::EssentialParameterNames(full)};
+  const internal::AllDataModel all_data{full, diagnosis.linear_parameters,
+                                        NamedParameters(full.system, PredictionChi(full.solution)),
+                                        internal::EstimatedParameterNames(full)};
   internal::ForwardSelection forward = internal::SelectForward(&context, all_data, &timer);
   diagnosis.initial_delay_s = forward.initial_delay_s;
   internal::BackwardElimination backward = internal::EliminateBackward(&context, forward.selected);
@@ -544,7 +549,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
     // without rotor term, even where the final model brought the coefficient back (a motor lag
     // restores kd, and the final linearisation then weighs Mz).
     const internal::EffectLinearization at_linear = internal::LinearizeEffects(
-        full.flights, diagnosis.linear_parameters, all_data.free_parameters, Effects{}, options.candidates);
+        full.flights, all_data.predicted, all_data.free_parameters, Effects{}, options.candidates);
     diagnosis.selected_scale_free =
         internal::SelectInUnscoredComponents(at_linear, scale_free, options, context.vehicle, &verdicts);
   }
@@ -557,7 +562,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   // Where.
   diagnosis.where_component = internal::WhereComponent(diagnosis.baseline);
   diagnosis.where =
-      LocateGap(full, diagnosis.final_parameters, diagnosis.final_effects, options.candidates, options.location);
+      LocateGap(full, final_model.predicted, diagnosis.final_effects, options.candidates, options.location);
   timer.Mark("where");
 
   diagnosis.refinements = evaluator.refinements();

@@ -61,8 +61,8 @@ Check CheckResidualSignature(const IdentificationResult& linear, const Diagnosis
     if (available) candidates.push_back(kind);
   }
   const internal::EffectLinearization linearization = internal::LinearizeEffects(
-      linear.flights, NamedParameters(linear.system, linear.solution.chi), internal::EssentialParameterNames(linear),
-      Effects{}, candidates, kSignatureRowSamples, options.num_threads);
+      linear.flights, NamedParameters(linear.system, PredictionChi(linear.solution)),
+      internal::EstimatedParameterNames(linear), Effects{}, candidates, kSignatureRowSamples, options.num_threads);
   // In-sample forward selection to first order: the effect that removes the most, then what each
   // further one adds on top, while that is at least min_shrink_pct and significant. An effect that
   // stands in for part of another (an acc delay for part of a lag) adds little once that one is in.

@@ -201,7 +201,7 @@ std::vector<EffectSignature> Signatures(const IdentificationResult& linear,
                                         const std::map<std::string, double>& linear_parameters,
                                         const std::vector<EffectKind>& candidates) {
   const internal::EffectLinearization linearization = internal::LinearizeEffects(
-      linear.flights, linear_parameters, internal::EssentialParameterNames(linear), Effects{}, candidates);
+      linear.flights, linear_parameters, internal::EstimatedParameterNames(linear), Effects{}, candidates);
   std::vector<EffectSignature> signatures;
   for (size_t k = 0; k < candidates.size(); ++k) {
     const internal::EffectSubsetFit fit = internal::FitEffectSubset(linearization, {candidates[k]});
@@ -234,7 +234,8 @@ GapLocation LocateGap(const IdentificationResult& linear, const std::map<std::st
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   GapLocation out;
   out.relative_error_pct = linear.relative_error_pct;
-  const std::map<std::string, double> linear_parameters = NamedParameters(linear.system, linear.solution.chi);
+  const std::map<std::string, double> linear_parameters =
+      NamedParameters(linear.system, PredictionChi(linear.solution));
   std::vector<internal::FlightResidual> baseline;
   for (const ProcessedFlight& flight : linear.flights)
     baseline.push_back(internal::ResidualOf(flight, linear_parameters, Effects{}));

@@ -69,10 +69,11 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
   return out;
 }
 
-std::vector<std::string> EssentialParameterNames(const IdentificationResult& linear) {
+std::vector<std::string> EstimatedParameterNames(const IdentificationResult& linear) {
   std::vector<std::string> names;
   for (int k = 0; k < linear.system.num_parameters(); ++k)
-    if (linear.solution.essential[k]) names.push_back(linear.system.parameter_names[k]);
+    if (linear.solution.essential[k] || (k >= kNumRotorCoefficients && linear.solution.Profiled(k)))
+      names.push_back(linear.system.parameter_names[k]);
   return names;
 }
 

@@ -31,9 +31,10 @@ struct FlightResidual {
 FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
                           const Effects& effects);
 
-// Names (as in NamedParameters) of the parameters the linear solution kept as essential: the chi
-// columns of a linearisation around it.
-std::vector<std::string> EssentialParameterNames(const IdentificationResult& linear);
+// Names (as in NamedParameters) of the parameters the linear solution estimates: the essential ones
+// and the profiled ones PredictionChi predicts with (not the rotor coefficients); the chi columns of a
+// linearisation around it, as the refinement keeps them free.
+std::vector<std::string> EstimatedParameterNames(const IdentificationResult& linear);
 
 // Labels of an effect's scalar parameters for this vehicle: {"delay_s"} or {"acc_bias_x", "acc_bias_y",
 // "acc_bias_z"}.

@@ -114,7 +114,7 @@ struct ScreeningPoint {
 };
 
 ScreeningPoint ScreeningPointOf(const AllDataModel& all_data, EffectMask selected, const ModelRecord& base) {
-  ScreeningPoint point{all_data.parameters, Effects{}};
+  ScreeningPoint point{all_data.predicted, Effects{}};
   if (selected == 0) return point;
   for (auto& [name, value] : point.parameters) {
     double sum = 0.0;

@@ -105,8 +105,9 @@ class PhaseTimer {
 // The linear model on all identification data, around which the screening linearises.
 struct AllDataModel {
   const IdentificationResult& linear;
-  std::map<std::string, double> parameters;  // NamedParameters of its solution
-  std::vector<std::string> free_parameters;  // its essential parameters
+  std::map<std::string, double> parameters;  // NamedParameters of its solution (discarded: 0)
+  std::map<std::string, double> predicted;   // and of what it predicts with (PredictionChi)
+  std::vector<std::string> free_parameters;  // its estimated parameters (EstimatedParameterNames)
 };
 
 // A candidate as the forward selection last screened or tested it.

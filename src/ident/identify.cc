@@ -224,7 +224,7 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
     for (const std::string& s : result.system.flight_source) sources += (sources.empty() ? "" : ", ") + s;
     throw Error(sources + ": " + solution.message);
   }
-  const std::map<std::string, double> values = NamedValues(result.system, solution.chi);
+  const std::map<std::string, double> values = NamedValues(result.system, PredictionChi(solution));
   RelativeErrorSums all_flights;
   for (const ProcessedFlight& f : result.flights) {
     const FlightResidualSums sums = ResidualSums(f, values);

@@ -140,6 +140,13 @@ void RelativeErrorSums::Add(const RelativeErrorSums& other) {
   }
 }
 
+Eigen::VectorXd PredictionChi(const TlsSolution& solution) {
+  Eigen::VectorXd chi = solution.chi;
+  for (Eigen::Index k = kNumRotorCoefficients; k < chi.size(); ++k)
+    if (solution.Profiled(static_cast<int>(k))) chi[k] = solution.profiled_chi[k];
+  return chi;
+}
+
 std::vector<std::optional<double>> RelativeErrorSums::Pct() const {
   std::vector<std::optional<double>> out(6);
   for (int j = 0; j < 6; ++j)

@@ -42,7 +42,7 @@ AblationResult Ablate(const IdentificationResult& linear, const std::vector<Proc
       options.num_threads = 1;
       options.compute_covariance = false;
       entry.result = Refine(linear, options);
-      const auto values = NamedParameters(linear.system, entry.result.refined.chi);
+      const auto values = NamedParameters(linear.system, PredictionChi(entry.result.refined));
       entry.relative_error_pct = entry.result.relative_error_pct;
       if (!held_out.empty())
         entry.held_out_relative_error_pct = RelativeErrorWithEffects(held_out, values, entry.result.effects);

@@ -985,8 +985,8 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   };
   result.linear_criterion = linear_criterion;
   result.refined_criterion = EffectCriterion(linear, result.effects);
-  result.relative_error_pct =
-      RelativeErrorWithEffects(linear.flights, NamedParameters(linear.system, result.refined.chi), result.effects);
+  result.relative_error_pct = RelativeErrorWithEffects(
+      linear.flights, NamedParameters(linear.system, PredictionChi(result.refined)), result.effects);
   // Confounded effects: say how much, and what the data fix instead.
   for (int a = 0; a < result.effect_correlation.rows(); ++a)
     for (int b = a + 1; b < result.effect_correlation.cols(); ++b)

@@ -27,6 +27,7 @@ ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names,
 
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
   nlohmann::json out = nlohmann::json::object();
+  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (size_t k = 0; k < names.size(); ++k) {
     const ParameterStatistics p = ParameterStatisticsOf(names, solution, k);
     nlohmann::json entry = {{"value", JsonNumber(p.value)},
@@ -38,6 +39,10 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
       entry["most_correlated_with"] = p.discarded->most_correlated;
       entry["correlation"] = JsonNumber(p.discarded->correlation);
     }
+    // A discarded parameter the model still estimates and predicts with (PredictionChi): validate
+    // predicts with it too.
+    const auto i = static_cast<Eigen::Index>(k);
+    if (predicted[i] != solution.chi[i]) entry["predicts_with"] = JsonNumber(predicted[i]);
     out[names[k]] = entry;
   }
   return out;
@@ -127,7 +132,7 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
 }
 
 std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
-                                                        const std::string& block) {
+                                                        const std::string& block, bool predicted) {
   std::string chosen = block;
   if (chosen.empty()) chosen = report.contains("refined") && report["refined"].contains("parameters") ? "refined" : "linear";
   if (!report.is_object() || !report.contains(chosen) || !report[chosen].is_object() ||
@@ -138,6 +143,8 @@ std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& re
     if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number())
       throw Error(source + ": parameter '" + name + "' has no numeric value");
     values[name] = entry["value"].get<double>();
+    if (predicted && entry.contains("predicts_with") && entry["predicts_with"].is_number())
+      values[name] = entry["predicts_with"].get<double>();
   }
   return values;
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -276,6 +277,46 @@ TEST(CliWorkflowRealTest, UlogCommandSignalIsNamed) {
   const std::string notes = flight["notes"].dump();
   EXPECT_NE(notes.find("not a measured speed"), std::string::npos) << notes;
   EXPECT_NE(notes.find("command_to_speed"), std::string::npos) << notes;
+}
+
+// A discarded inertia the noise-aware TLS still estimates (a Crazyflie-like take-off with ground
+// effect barely moves in yaw: I_zz is discarded and profiled) is what the model predicts with: the
+// report gives it as `predicts_with`, and `validate` on the identification flight reproduces
+// identify's Table III only with it (held at 0, Mx differs).
+TEST(ValidateCliTest, PredictsWithTheDiscardedInertiaTheModelEstimated) {
+  const std::string dir = MakeTempDir("rotorid-predicts-with");
+  const auto path = [&](const std::string& name) { return dir + "/" + name; };
+  const auto sim = RunRotorid({"simulate", "--preset", "CF", "--seconds", "40", "--seed", "1", "--profile",
+                               "takeoff-landing", "--effect", "ground_effect=1.0", "--out", path("f.csv"),
+                               "--vehicle-out", path("CF.yaml"), "--quiet"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const std::vector<std::string> flight = {"--vehicle", path("CF.yaml"), "--log", path("f.csv")};
+  auto run = [&](std::vector<std::string> args) {
+    args.insert(args.end(), flight.begin(), flight.end());
+    return RunRotorid(args);
+  };
+  const auto identify = run({"identify", "--json", path("i.json")});
+  ASSERT_EQ(identify.exit_code, 0) << identify.err;
+  nlohmann::json report = LoadJson(path("i.json"));
+  const nlohmann::json& izz = report["linear"]["parameters"]["CF.I_zz"];
+  ASSERT_FALSE(izz["essential"].get<bool>()) << izz;
+  EXPECT_EQ(izz["value"].get<double>(), 0.0);
+  ASSERT_TRUE(izz.contains("predicts_with")) << izz;
+  EXPECT_GT(izz["predicts_with"].get<double>(), 0.0);
+
+  const auto validate = run({"validate", "--params", path("i.json"), "--json", path("v.json")});
+  ASSERT_EQ(validate.exit_code, 0) << validate.err;
+  const nlohmann::json& table = report["linear"]["relative_error_pct"];
+  const nlohmann::json validated = LoadJson(path("v.json"))["relative_error_pct"];
+  for (const char* c : {"Fz", "Mx", "My"})
+    EXPECT_NEAR(validated[c].get<double>(), table[c].get<double>(), 1e-9 * table[c].get<double>()) << c;
+
+  report["linear"]["parameters"]["CF.I_zz"].erase("predicts_with");
+  std::ofstream(path("held_at_zero.json")) << report.dump();
+  const auto at_zero = run({"validate", "--params", path("held_at_zero.json"), "--json", path("z.json")});
+  ASSERT_EQ(at_zero.exit_code, 0) << at_zero.err;
+  EXPECT_GT(std::abs(LoadJson(path("z.json"))["relative_error_pct"]["Mx"].get<double>() - table["Mx"].get<double>()),
+            1e-3);
 }
 
 }  // namespace

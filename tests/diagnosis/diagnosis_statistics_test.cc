@@ -39,12 +39,9 @@ TEST(EffectLinearizationTest, FirstOrderStepRecoversAnAccBias) {
   options.effects.Set("acc_bias", Eigen::Vector3d(0.2, -0.3, 0.15));
   const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
   const IdentificationResult linear = Identify({{sim.vehicle, sim.log, 1.0}}, IdentifyOptions{});
-  std::vector<std::string> free;
-  for (int k = 0; k < linear.system.num_parameters(); ++k)
-    if (linear.solution.essential[k]) free.push_back(linear.system.parameter_names[k]);
-  const EffectLinearization lin =
-      LinearizeEffects(linear.flights, NamedParameters(linear.system, linear.solution.chi), free, Effects{},
-                       {ParseEffectKind("acc_bias"), ParseEffectKind("gyro_bias")});
+  const EffectLinearization lin = LinearizeEffects(
+      linear.flights, NamedParameters(linear.system, PredictionChi(linear.solution)), EstimatedParameterNames(linear),
+      Effects{}, {ParseEffectKind("acc_bias"), ParseEffectKind("gyro_bias")});
   ASSERT_EQ(lin.labels.size(), 6u);
   EXPECT_EQ(lin.labels[0], "acc_bias_x");
   const EffectSubsetFit fit = FitEffectSubset(lin, {ParseEffectKind("acc_bias")});
@@ -80,9 +77,9 @@ TEST(EffectLinearizationTest, AStrideOfRowSamplesStandsForAllRows) {
   options.effects.Set("motor_tau_s", 0.03);
   const SimulationResult sim = Simulate(vehicle.vehicle, vehicle.parameters, options);
   const IdentificationResult linear = Identify({{sim.vehicle, sim.log, 1.0}}, IdentifyOptions{});
-  const std::vector<std::string> free = EssentialParameterNames(linear);
+  const std::vector<std::string> free = EstimatedParameterNames(linear);
   const std::vector<EffectKind> kinds = {ParseEffectKind("motor_lag"), ParseEffectKind("acc_bias")};
-  const auto chi = NamedParameters(linear.system, linear.solution.chi);
+  const auto chi = NamedParameters(linear.system, PredictionChi(linear.solution));
   const EffectLinearization all = LinearizeEffects(linear.flights, chi, free, Effects{}, kinds);
   const int samples = linear.flights.front().num_rows_samples();
   const EffectLinearization thinned = LinearizeEffects(linear.flights, chi, free, Effects{}, kinds, (samples + 2) / 3);

@@ -137,6 +137,13 @@ struct TlsSolution {
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 
+// The parameters a model predicts with: chi, and the profiled parameters' estimates in place of their
+// zeros (a discarded inertia is estimated beside the others, and its gyroscopic terms act in Mx and My:
+// held at 0 in the prediction, jana06's Table III read Mx 29.1 % for 21.9 %), except the rotor
+// coefficients': a discarded kd is no identified rotor term, so Mz keeps none and stays out of
+// Table III (INTERFACE.md 5). The reported values stay chi (discarded: 0).
+Eigen::VectorXd PredictionChi(const TlsSolution& solution);
+
 // min over the essential parameters of sum_i lambda_i (w_i . chi_t)^2 / (chi_t^T N chi_t) / rows for
 // the rows `w` (same layout as the system the solution came from), with the solution's lambda and N:
 // the TLS criterion of other data (e.g. with an effect applied) under fixed weights.

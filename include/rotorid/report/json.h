@@ -45,9 +45,11 @@ nlohmann::json FlightFitJson(const FlightFit& fit);
 nlohmann::json LinearJson(const IdentificationResult& result);
 
 // Parameter values by name from a report's "<block>.parameters" (refined when present, else
-// linear, unless `block` names one). Throws rotorid::Error naming the file on a malformed report.
+// linear, unless `block` names one): the reported values, or with `predicted` those the model
+// predicts with (a discarded inertia's `predicts_with`: PredictionChi). Throws rotorid::Error naming
+// the file on a malformed report.
 std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
-                                                        const std::string& block = "");
+                                                        const std::string& block = "", bool predicted = false);
 
 nlohmann::json ReadJsonFile(const std::string& path);
 // Pretty JSON, written atomically.
