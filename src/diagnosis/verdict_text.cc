@@ -272,6 +272,8 @@ std::string HowFarText(const Diagnosis& d) {
     if (d.baseline.residual_rms[c] > 0.0)
       out << " (" << std::showpos << std::setprecision(0) << 100.0 * (last / d.baseline.residual_rms[c] - 1.0)
           << std::noshowpos << " %)";
+    // Mz without kd: the held-out score leaves it out, and its residual lacks the rotor term.
+    if (!d.baseline.gap_pct[c]) out << "; not scored (no rotor term in the linear model)";
     out << "\n";
   }
   return out.str();
