@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/refine/effect_model.h"
@@ -228,11 +229,16 @@ void PrintParameterTable(std::ostream& out, const std::vector<std::string>& name
   out << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(14) << "value"
       << std::setw(12) << "std" << std::setw(10) << "%sigma"
       << "  essential\n";
+  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (size_t k = 0; k < names.size(); ++k) {
+    const auto i = static_cast<Eigen::Index>(k);
     out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific
-        << std::setprecision(4) << std::setw(14) << solution.chi[k] << std::setprecision(2) << std::setw(12)
-        << solution.std[k] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[k] << "  "
-        << (solution.essential[k] ? "yes" : "no (discarded)") << "\n";
+        << std::setprecision(4) << std::setw(14) << solution.chi[i] << std::setprecision(2) << std::setw(12)
+        << solution.std[i] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[i] << "  "
+        << (solution.essential[k] ? "yes" : "no (discarded)");
+    // A discarded inertia the model still estimates and predicts with (PredictionChi).
+    if (predicted[i] != solution.chi[i]) out << ", predicted with " << ShortNumber(predicted[i]);
+    out << "\n";
   }
   out.unsetf(std::ios::floatfield);
 }

@@ -303,6 +303,11 @@ TEST(ValidateCliTest, PredictsWithTheDiscardedInertiaTheModelEstimated) {
   EXPECT_EQ(izz["value"].get<double>(), 0.0);
   ASSERT_TRUE(izz.contains("predicts_with")) << izz;
   EXPECT_GT(izz["predicts_with"].get<double>(), 0.0);
+  const size_t line = identify.out.find("\nCF.I_zz ");
+  ASSERT_NE(line, std::string::npos) << identify.out;
+  EXPECT_NE(identify.out.substr(line, identify.out.find('\n', line + 1) - line).find("no (discarded), predicted with "),
+            std::string::npos)
+      << identify.out;
 
   const auto validate = run({"validate", "--params", path("i.json"), "--json", path("v.json")});
   ASSERT_EQ(validate.exit_code, 0) << validate.err;
