@@ -264,14 +264,13 @@ std::string HowFarText(const Diagnosis& d) {
     // scales cancel a static moment that the baseline's first moment balanced: jana01's My read 8.4 ->
     // 33.3 % while its residual fell by a third): the residual itself is the comparison that no
     // divisor moves, so each step's is printed too.
-    if (d.steps.empty()) continue;
     out << "          residual " << std::scientific << std::setprecision(2) << d.baseline.residual_rms[c];
     for (const SelectionStep& step : d.steps) out << " -> " << step.after.residual_rms[c];
-    const double last = d.steps.back().after.residual_rms[c];
     out << (c < 3 ? " N" : " N m") << std::fixed;
-    if (d.baseline.residual_rms[c] > 0.0)
-      out << " (" << std::showpos << std::setprecision(0) << 100.0 * (last / d.baseline.residual_rms[c] - 1.0)
-          << std::noshowpos << " %)";
+    if (!d.steps.empty() && d.baseline.residual_rms[c] > 0.0)
+      out << " (" << std::showpos << std::setprecision(0)
+          << 100.0 * (d.steps.back().after.residual_rms[c] / d.baseline.residual_rms[c] - 1.0) << std::noshowpos
+          << " %)";
     // Mz without kd: the held-out score leaves it out, and its residual lacks the rotor term.
     if (!d.baseline.gap_pct[c]) out << "; not scored (no rotor term in the linear model)";
     out << "\n";
