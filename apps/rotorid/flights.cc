@@ -229,7 +229,6 @@ void PrintParameterTable(std::ostream& out, const std::vector<std::string>& name
   out << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(14) << "value"
       << std::setw(12) << "std" << std::setw(10) << "%sigma"
       << "  essential\n";
-  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (size_t k = 0; k < names.size(); ++k) {
     const auto i = static_cast<Eigen::Index>(k);
     out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific
@@ -237,7 +236,8 @@ void PrintParameterTable(std::ostream& out, const std::vector<std::string>& name
         << solution.std[i] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[i] << "  "
         << (solution.essential[k] ? "yes" : "no (discarded)");
     // A discarded inertia the model still estimates and predicts with (PredictionChi).
-    if (predicted[i] != solution.chi[i]) out << ", predicted with " << ShortNumber(predicted[i]);
+    if (PredictsWithProfiled(solution, static_cast<int>(k)))
+      out << ", predicted with " << ShortNumber(solution.profiled_chi[i]);
     out << "\n";
   }
   out.unsetf(std::ios::floatfield);

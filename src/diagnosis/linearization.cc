@@ -72,7 +72,7 @@ FlightResidual ResidualOf(const ProcessedFlight& flight, const std::map<std::str
 std::vector<std::string> EstimatedParameterNames(const IdentificationResult& linear) {
   std::vector<std::string> names;
   for (int k = 0; k < linear.system.num_parameters(); ++k)
-    if (linear.solution.essential[k] || (k >= kNumRotorCoefficients && linear.solution.Profiled(k)))
+    if (linear.solution.essential[k] || PredictsWithProfiled(linear.solution, k))
       names.push_back(linear.system.parameter_names[k]);
   return names;
 }

@@ -140,10 +140,14 @@ void RelativeErrorSums::Add(const RelativeErrorSums& other) {
   }
 }
 
+bool PredictsWithProfiled(const TlsSolution& solution, int k) {
+  return k >= kNumRotorCoefficients && solution.Profiled(k);
+}
+
 Eigen::VectorXd PredictionChi(const TlsSolution& solution) {
   Eigen::VectorXd chi = solution.chi;
-  for (Eigen::Index k = kNumRotorCoefficients; k < chi.size(); ++k)
-    if (solution.Profiled(static_cast<int>(k))) chi[k] = solution.profiled_chi[k];
+  for (Eigen::Index k = 0; k < chi.size(); ++k)
+    if (PredictsWithProfiled(solution, static_cast<int>(k))) chi[k] = solution.profiled_chi[k];
   return chi;
 }
 

@@ -27,7 +27,6 @@ ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names,
 
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
   nlohmann::json out = nlohmann::json::object();
-  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (size_t k = 0; k < names.size(); ++k) {
     const ParameterStatistics p = ParameterStatisticsOf(names, solution, k);
     nlohmann::json entry = {{"value", JsonNumber(p.value)},
@@ -41,8 +40,8 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
     }
     // A discarded parameter the model still estimates and predicts with (PredictionChi): validate
     // predicts with it too.
-    const auto i = static_cast<Eigen::Index>(k);
-    if (predicted[i] != solution.chi[i]) entry["predicts_with"] = JsonNumber(predicted[i]);
+    if (PredictsWithProfiled(solution, static_cast<int>(k)))
+      entry["predicts_with"] = JsonNumber(solution.profiled_chi[static_cast<Eigen::Index>(k)]);
     out[names[k]] = entry;
   }
   return out;

@@ -143,6 +143,9 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 // coefficients': a discarded kd is no identified rotor term, so Mz keeps none and stays out of
 // Table III (INTERFACE.md 5). The reported values stay chi (discarded: 0).
 Eigen::VectorXd PredictionChi(const TlsSolution& solution);
+// Whether PredictionChi takes parameter k's profiled estimate (a profiled parameter, not a rotor
+// coefficient): what the model estimates beside its essential parameters and predicts with.
+bool PredictsWithProfiled(const TlsSolution& solution, int k);
 
 // min over the essential parameters of sum_i lambda_i (w_i . chi_t)^2 / (chi_t^T N chi_t) / rows for
 // the rows `w` (same layout as the system the solution came from), with the solution's lambda and N:
