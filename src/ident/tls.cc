@@ -141,7 +141,7 @@ void RelativeErrorSums::Add(const RelativeErrorSums& other) {
 }
 
 bool PredictsWithProfiled(const TlsSolution& solution, int k) {
-  return k >= kNumRotorCoefficients && solution.Profiled(k);
+  return k >= kNumRotorCoefficients && solution.Profiled(k) && solution.profiled_chi[k] > 0.0;
 }
 
 Eigen::VectorXd PredictionChi(const TlsSolution& solution) {

@@ -166,5 +166,25 @@ TEST(RelativeErrorTest, NullWhereDenominatorVanishes) {
   EXPECT_NEAR(*rel[2], 50.0, 1e-12);  // |(-2 + 1)| / |-2|
 }
 
+// What a model predicts with: a profiled inertia's estimate when it is positive; a profiled rotor
+// coefficient (kd) and a wrong-signed profiled inertia stay at the reported 0.
+TEST(PredictionChiTest, PredictsWithAPositiveProfiledInertiaOnly) {
+  TlsSolution solution;
+  solution.chi = Eigen::VectorXd::Zero(5);
+  solution.chi << 2e-8, 0.0, 1.7e-5, 0.0, 0.0;  // kt, kd, I_xx, I_yy, I_zz
+  solution.profiled = {false, true, false, true, true};
+  solution.profiled_chi = Eigen::VectorXd::Zero(5);
+  solution.profiled_chi << 0.0, 1.7e-11, 0.0, -9e-6, 9.5e-6;
+  const Eigen::VectorXd predicted = PredictionChi(solution);
+  EXPECT_EQ(predicted[0], 2e-8);
+  EXPECT_EQ(predicted[1], 0.0);  // kd: no identified rotor term
+  EXPECT_EQ(predicted[2], 1.7e-5);
+  EXPECT_EQ(predicted[3], 0.0);  // negative: no inertia
+  EXPECT_EQ(predicted[4], 9.5e-6);
+  EXPECT_FALSE(PredictsWithProfiled(solution, 1));
+  EXPECT_FALSE(PredictsWithProfiled(solution, 3));
+  EXPECT_TRUE(PredictsWithProfiled(solution, 4));
+}
+
 }  // namespace
 }  // namespace rotorid

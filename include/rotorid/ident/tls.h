@@ -138,13 +138,15 @@ struct TlsSolution {
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 
 // The parameters a model predicts with: chi, and the profiled parameters' estimates in place of their
-// zeros (a discarded inertia is estimated beside the others, and its gyroscopic terms act in Mx and My:
+// zeros where PredictsWithProfiled (a discarded inertia is estimated beside the others, and its gyroscopic terms act in Mx and My:
 // held at 0 in the prediction, jana06's Table III read Mx 29.1 % for 21.9 %), except the rotor
 // coefficients': a discarded kd is no identified rotor term, so Mz keeps none and stays out of
 // Table III (INTERFACE.md 5). The reported values stay chi (discarded: 0).
 Eigen::VectorXd PredictionChi(const TlsSolution& solution);
 // Whether PredictionChi takes parameter k's profiled estimate (a profiled parameter, not a rotor
-// coefficient): what the model estimates beside its essential parameters and predicts with.
+// coefficient, with the sign its physics requires): what the model estimates beside its essential
+// parameters and predicts with. A profiled inertia estimated negative (jana04's PWM-driven I_xx
+// -9.0e-6) is no inertia to predict with: it stays at 0, as reported.
 bool PredictsWithProfiled(const TlsSolution& solution, int k);
 
 // min over the essential parameters of sum_i lambda_i (w_i . chi_t)^2 / (chi_t^T N chi_t) / rows for
