@@ -158,18 +158,6 @@ TEST(RealVehicleEffectsTest, PerRotorValueOfTheWrongSizeIsRefused) {
   }
 }
 
-SimulationResult SimulateWith(const Effects& effects, std::uint64_t seed, double seconds = 60.0,
-                              double hover_altitude_m = 1.5) {
-  const SimulationVehicle vehicle = PresetVehicle("A");
-  SimulationOptions options;
-  options.duration_s = seconds;
-  options.seed = seed;
-  options.effects = effects;
-  options.mocap = true;
-  options.hover_altitude_m = hover_altitude_m;
-  return Simulate(vehicle.vehicle, vehicle.parameters, options);
-}
-
 RefineResult RefineWith(const IdentificationResult& linear, const std::vector<std::string>& names) {
   RefineOptions options;
   options.effects.clear();
@@ -177,51 +165,11 @@ RefineResult RefineWith(const IdentificationResult& linear, const std::vector<st
   return Refine(linear, options);
 }
 
-// Each effect alone on rotorid's simulator, refined by name: recovered within issue 12's
-// tolerances (drag coefficients 10 %, rotor inertia 15 %, thrust scales 0.01, acc_delay 1 ms,
-// ground effect 20 %) and within 3 std.
-struct SimulatedCase {
-  std::string effect;
-  Eigen::VectorXd value;
-  double tolerance;  // absolute, per coordinate
-  double hover_altitude_m = 1.5;
-};
-
-void PrintTo(const SimulatedCase& c, std::ostream* out) { *out << c.effect; }
-
-class SimulatedRecoveryTest : public ::testing::TestWithParam<SimulatedCase> {};
-
-TEST_P(SimulatedRecoveryTest, RefinementRecoversTheInjectedValue) {
-  const SimulatedCase& c = GetParam();
-  Effects effects;
-  effects.Set(Kind(c.effect), c.value);
-  const SimulationResult sim = SimulateWith(effects, 5, 60.0, c.hover_altitude_m);
-  const IdentificationResult linear = testing::IdentifySimulated(sim);
-  const RefineResult refined = RefineWith(linear, {c.effect});
-  const Eigen::VectorXd got = refined.effects.Get(Kind(c.effect));
-  const Eigen::VectorXd std_dev = refined.effects_std.Get(Kind(c.effect));
-  ASSERT_EQ(got.size(), c.value.size());
-  for (Eigen::Index k = 0; k < got.size(); ++k) {
-    EXPECT_NEAR(got[k], c.value[k], c.tolerance) << c.effect << " " << k;
-    if (std_dev.size() == got.size() && refined.has_covariance) {
-      EXPECT_NEAR(got[k], c.value[k], 3 * std_dev[k] + 1e-12) << c.effect << " " << k << ", std " << std_dev[k];
-    }
-  }
-  EXPECT_TRUE(refined.has_covariance);
-}
-
 Eigen::VectorXd Values(std::initializer_list<double> v) {
   return Eigen::Map<const Eigen::VectorXd>(v.begin(), static_cast<Eigen::Index>(v.size()));
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Effects, SimulatedRecoveryTest,
-    ::testing::Values(SimulatedCase{"rotor_drag", Values({4e-5, 6e-6}), 0.1 * 4e-5},
-                      SimulatedCase{"rotor_inertia", Values({3e-6}), 0.15 * 3e-6},
-                      SimulatedCase{"rotor_thrust_scale", Values({0.03, -0.02, -0.03, 0.02}), 0.01},
-                      SimulatedCase{"acc_delay", Values({0.005}), 0.001},
-                      SimulatedCase{"ground_effect", Values({1.0}), 0.2, 0.3}),
-    [](const auto& test_info) { return test_info.param.effect; });
+// Each effect alone on rotorid's simulator: tests/model/effect_harness_test.cc, over the whole registry.
 
 // The flapping coefficient is measured about the IMU's height: the force rows see only ms_z - m r_z,
 // and the drag force's moment about the centre of mass follows that ms_z. With the IMU 30 mm below
@@ -394,8 +342,7 @@ TEST(VelocityColumnsTest, AreReadUsedAndNeedThePose) {
     FAIL() << "velocity columns without a pose were accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("vel_x..z (world frame) need the pose"), std::string::npos) << e.what();
-    EXPECT_EQ(std::string(e.what()).rfind("v.csv:1:", 0), 0u)
-        << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("v.csv:1:", 0), 0u) << e.what();
   }
   const auto dir = testing::SharedDataPath("independent-sim");
   if (!dir) GTEST_SKIP() << "../shared/data/independent-sim is absent";

@@ -1,9 +1,9 @@
 #include "rotorid/model/rigid_body.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "rotorid/model/rotation.h"
 
@@ -43,7 +43,7 @@ Eigen::Matrix<double, 6, 9> WrittenOutRegressor(const Eigen::Vector3d& w, const 
       wx * wz - ay, wy * wz + ax, -wx * wx - wy * wy;
   d.block<3, 3>(3, 0) << 0, s.z(), -s.y(), -s.z(), 0, s.x(), s.y(), -s.x(), 0;
   d.block<3, 6>(3, 3) << ax, -wy * wz, wy * wz, ay - wx * wz, az + wx * wy, wy * wy - wz * wz,  //
-      wx * wz, ay, -wx * wz, ax + wy * wz, wz * wz - wx * wx, az - wx * wy,                    //
+      wx * wz, ay, -wx * wz, ax + wy * wz, wz * wz - wx * wx, az - wx * wy,                     //
       -wx * wy, wx * wy, az, wx * wx - wy * wy, ax - wy * wz, ay + wx * wz;
   return d;
 }
@@ -69,8 +69,7 @@ TEST_P(RegressorTest, MatchesNewtonEulerOnRandomStates) {
     chi_t << kt, kd, body.ToVector(), 1.0;
 
     const Wrench<double> lhs = IdimRows<double>(w, wd, s, omega, vehicle) * chi_t;
-    const Wrench<double> rigid =
-        RigidBodyWrench<double>(w, wd, s, vehicle.mass_kg, body.first_moment, body.inertia);
+    const Wrench<double> rigid = RigidBodyWrench<double>(w, wd, s, vehicle.mass_kg, body.first_moment, body.inertia);
     const Wrench<double> rotor = RotorWrench<double>(omega, kt, kd, vehicle);
     const double scale = rotor.norm();
     EXPECT_LT((lhs - (rigid - rotor)).norm(), 1e-12 * scale) << "trial " << trial;
@@ -119,8 +118,7 @@ TEST(RotationTest, BryantRateMatrixMatchesNumericDerivative) {
   const Eigen::Matrix3d w_skew = BryantToRotation(eta).transpose() * r_dot;  // [w x] in the body frame
   const Eigen::Vector3d w(w_skew(2, 1), w_skew(0, 2), w_skew(1, 0));
   EXPECT_LT((w - BryantRateMatrix(eta) * eta_dot).norm(), 1e-8);
-  const Eigen::Matrix3d t_dot =
-      (BryantRateMatrix(eta + h * eta_dot) - BryantRateMatrix(eta - h * eta_dot)) / (2 * h);
+  const Eigen::Matrix3d t_dot = (BryantRateMatrix(eta + h * eta_dot) - BryantRateMatrix(eta - h * eta_dot)) / (2 * h);
   EXPECT_LT((t_dot - BryantRateMatrixDerivative(eta, eta_dot)).norm(), 1e-8);
 }
 
