@@ -32,7 +32,7 @@ const EffectDescriptor& AccDelayEffect() {
     i.name = "acc_delay";
     i.parameter_name = "acc_delay_s";
     i.unit = "s";
-    i.meaning = "acc_log(t) = s(t - acc_delay_s): the accelerometer lags the gyro";
+    // acc_log(t) = s(t - acc_delay_s): the accelerometer lags the gyro
     i.stage = EffectStage::kImuSensor;
     i.chain_position = 3;
     i.inputs = {FlightInput::kSpecificForceRates};

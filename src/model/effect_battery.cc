@@ -50,7 +50,7 @@ const EffectDescriptor& BatteryEffect() {
     i.name = "battery";
     i.parameter_name = "battery_exponent";
     i.unit = "1";
-    i.meaning = "Omega = map(u (V / V_ref)^beta), beta = battery_exponent; command logs with a voltage";
+    // Omega = map(u (V / V_ref)^beta), beta = battery_exponent; command logs with a voltage
     i.stage = EffectStage::kRotorSignal;
     i.chain_position = -1;
     i.dimension = 1;

@@ -48,7 +48,7 @@ const EffectDescriptor& DelayEffect() {
     i.name = "delay";
     i.parameter_name = "delay_s";
     i.unit = "s";
-    i.meaning = "Omega_true(t) = Omega_log(t - delay_s), cubic (Catmull-Rom) interpolation";
+    // Omega_true(t) = Omega_log(t - delay_s), cubic (Catmull-Rom) interpolation
     i.stage = EffectStage::kRotorSignal;
     i.chain_position = 0;
     i.dimension = 1;

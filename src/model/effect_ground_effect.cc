@@ -35,7 +35,7 @@ const EffectDescriptor& GroundEffectEffect() {
     i.name = "ground_effect";
     i.parameter_name = "ground_effect_coefficient";
     i.unit = "1";
-    i.meaning = "thrust_i / (1 - rho (R / (4 h_i))^2), rho = ground_effect_coefficient";
+    // thrust_i / (1 - rho (R / (4 h_i))^2), rho = ground_effect_coefficient
     i.stage = EffectStage::kRotorWrench;
     i.chain_position = 3;
     i.dimension = 1;

@@ -37,7 +37,7 @@ const EffectDescriptor& AccBiasEffect() {
     i.name = "acc_bias";
     i.parameter_name = "acc_bias";
     i.unit = "m/s^2";
-    i.meaning = "acc_log = Exp(r) s_body + acc_bias (IMU frame)";
+    // acc_log = Exp(r) s_body + acc_bias (IMU frame)
     i.stage = EffectStage::kImuSensor;
     i.chain_position = 2;
     i.dimension = 3;
@@ -64,7 +64,7 @@ const EffectDescriptor& GyroBiasEffect() {
     i.name = "gyro_bias";
     i.parameter_name = "gyro_bias";
     i.unit = "rad/s";
-    i.meaning = "gyro_log = Exp(r) w_body + gyro_bias (IMU frame)";
+    // gyro_log = Exp(r) w_body + gyro_bias (IMU frame)
     i.stage = EffectStage::kImuSensor;
     i.chain_position = 2;
     i.dimension = 3;

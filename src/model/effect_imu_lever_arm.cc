@@ -37,7 +37,7 @@ const EffectDescriptor& ImuLeverArmEffect() {
     i.name = "imu_lever_arm";
     i.parameter_name = "imu_position_m";
     i.unit = "m";
-    i.meaning = "accelerometer at r = imu_position_m (F_d): s_r = s + w' x r + w x (w x r)";
+    // accelerometer at r = imu_position_m (F_d): s_r = s + w' x r + w x (w x r)
     i.stage = EffectStage::kImuSensor;
     i.chain_position = 0;
     i.dimension = 3;

@@ -35,7 +35,7 @@ const EffectDescriptor& MisalignmentEffect() {
     i.name = "misalignment";
     i.parameter_name = "misalignment_rad";
     i.unit = "rad";
-    i.meaning = "v_imu = Exp(r) v_body, r = misalignment_rad (rotation vector)";
+    // v_imu = Exp(r) v_body, r = misalignment_rad (rotation vector)
     i.stage = EffectStage::kImuSensor;
     i.chain_position = 1;
     i.dimension = 3;

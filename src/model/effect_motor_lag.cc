@@ -50,7 +50,7 @@ const EffectDescriptor& MotorLagEffect() {
     i.name = "motor_lag";
     i.parameter_name = "motor_tau_s";
     i.unit = "s";
-    i.meaning = "tau dOmega/dt = Omega_cmd - Omega, tau = motor_tau_s >= 0";
+    // tau dOmega/dt = Omega_cmd - Omega, tau = motor_tau_s >= 0
     i.stage = EffectStage::kRotorSignal;
     i.chain_position = 1;
     i.dimension = 1;

@@ -42,7 +42,7 @@ const EffectDescriptor& RotorDragEffect() {
     i.parameter_name = "rotor_drag_coefficient";
     i.labels = {"rotor_drag_coefficient", "flapping_moment_coefficient"};
     i.unit = "N s/m per rad/s";
-    i.meaning = "f_i = -k_d |Omega_i| v_i_perp at p_i, tau_i = -k_f |Omega_i| (z x v_i_perp)";
+    // f_i = -k_d |Omega_i| v_i_perp at p_i, tau_i = -k_f |Omega_i| (z x v_i_perp)
     i.stage = EffectStage::kRotorWrench;
     i.chain_position = 1;
     i.dimension = 2;

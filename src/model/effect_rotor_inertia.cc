@@ -37,7 +37,7 @@ const EffectDescriptor& RotorInertiaEffect() {
     i.name = "rotor_inertia";
     i.parameter_name = "rotor_inertia_kgm2";
     i.unit = "kg m^2";
-    i.meaning = "tau = -J sum_i sigma_i (Omega_i' z + Omega_i w x z), J = rotor_inertia_kgm2 >= 0";
+    // tau = -J sum_i sigma_i (Omega_i' z + Omega_i w x z), J = rotor_inertia_kgm2 >= 0
     i.stage = EffectStage::kRotorWrench;
     i.chain_position = 2;
     i.dimension = 1;

@@ -26,7 +26,7 @@ const EffectDescriptor& RotorThrustScaleEffect() {
     i.name = "rotor_thrust_scale";
     i.parameter_name = "rotor_thrust_scale";
     i.unit = "1";
-    i.meaning = "rotor i: thrust kt (1 + s_i) Omega_i^2, drag torque kd (1 + s_i) Omega_i^2, sum s_i = 0";
+    // rotor i: thrust kt (1 + s_i) Omega_i^2, drag torque kd (1 + s_i) Omega_i^2, sum s_i = 0
     i.stage = EffectStage::kRotorWrench;
     i.chain_position = 0;
     i.per_rotor = true;

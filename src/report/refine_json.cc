@@ -33,11 +33,18 @@ std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& val
     const std::vector<std::string>& labels = kind->info().labels;
     if (!labels.empty()) {  // one entry per coefficient, as INTERFACE.md names them
       for (size_t k = 0; k < labels.size(); ++k)
-        out.push_back({labels[k], Eigen::VectorXd::Constant(1, at(v, k)), Eigen::VectorXd::Constant(1, at(s, k)),
-                       true, on, bounded, {}});
+        out.push_back({labels[k],
+                       Eigen::VectorXd::Constant(1, at(v, k)),
+                       Eigen::VectorXd::Constant(1, at(s, k)),
+                       true,
+                       on,
+                       bounded,
+                       {},
+                       {}});
     } else {
-      out.push_back({EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded,
-                     kind->HeldLabels(static_cast<int>(v.size()))});
+      std::vector<std::string> held = kind->HeldLabels(static_cast<int>(v.size()));
+      const std::string why = held.empty() ? std::string() : kind->info().held_why;
+      out.push_back({EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded, std::move(held), why});
     }
   }
   return out;
@@ -51,7 +58,10 @@ nlohmann::json EffectsJson(const Effects& value, const Effects& std_dev, const s
                    {"std", e.scalar ? JsonNumber(e.std[0]) : VectorJson(e.std)},
                    {"enabled", e.enabled},
                    {"on_bound", e.on_bound}};
-    if (!e.held.empty()) out[e.name]["held"] = e.held;
+    if (!e.held.empty()) {
+      out[e.name]["held"] = e.held;
+      out[e.name]["held_why"] = e.held_why;
+    }
   }
   return out;
 }
@@ -77,7 +87,8 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
           {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled, refined.on_bound)},
           {"relative_error_pct", ComponentsJson(refined.relative_error_pct)},
           {"effect_correlation", {{"labels", refined.effect_labels}, {"matrix", correlation}}},
-          {"criterion", {{"linear", JsonNumber(refined.linear_criterion)}, {"refined", JsonNumber(refined.refined_criterion)}}},
+          {"criterion",
+           {{"linear", JsonNumber(refined.linear_criterion)}, {"refined", JsonNumber(refined.refined_criterion)}}},
           {"autocorrelation_factor", JsonNumber(refined.autocorrelation_factor)},
           {"solver", SolverJson(refined.solver)},
           {"warnings", refined.warnings}};

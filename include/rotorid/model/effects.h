@@ -167,7 +167,6 @@ class EffectDescriptor {
     // Names of the scalar parameters when each has its own (rotor_drag's two coefficients); else
     // parameter_name with axis ("_x") or rotor ("_1") suffixes.
     std::vector<std::string> labels;
-    std::string meaning;  // one line: the model and its sign convention
     EffectStage stage = EffectStage::kImuSensor;
     // Place in the chain of its stage, from the physics (0) towards the log: the simulator applies
     // the stage's effects in increasing order, the model's correction in decreasing order.
@@ -201,7 +200,7 @@ class EffectDescriptor {
     // Coordinates the refinement and the diagnosis hold at their start value (the vehicle file's
     // known value, else 0) because a parameter of the linear model has the same columns in every
     // row these flights give (an IMU lever arm along z is the first moment ms_z), and why: estimated,
-    // such a coordinate only takes that parameter's place (MODEL.md 8).
+    // such a coordinate only takes that parameter's place (MODEL.md 8); held_why says it in the report.
     std::vector<int> held_coordinates;
     std::string held_why;
     // Whether "all" (refine's and ablate's default, the diagnosis's candidates) includes it: false

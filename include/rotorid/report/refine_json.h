@@ -27,6 +27,7 @@ struct EffectParameterEstimate {
   bool enabled = false;
   bool on_bound = false;
   std::vector<std::string> held;  // coordinates held at the vehicle file's value, not estimated
+  std::string held_why;           // why (EffectDescriptor::Info::held_why), when some are
 };
 // Every effect parameter of the registry, in its order.
 std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& value, const Effects& std_dev,
