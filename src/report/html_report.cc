@@ -13,6 +13,7 @@
 
 #include "report/diagnosis_section.h"
 #include "report/gnuplot.h"
+#include "report/html_answer.h"
 #include "report/html_text.h"
 #include "report/report_figures.h"
 #include "report/spectrum.h"
@@ -223,7 +224,6 @@ class ReportBuilder {
   std::string WrenchSection() const;
   std::string SpectrumSection() const;
   std::string ChecksSection() const;
-  bool AnyCheckNotOk() const;
   std::string InputFlightsTable() const;
   std::string AblationSection() const;
   std::string SettingsSection() const;
@@ -556,25 +556,18 @@ std::string ReportBuilder::ChecksSection() const {
   if (!input_.checks) return "";
   std::string rows;
   int not_ok = 0;
-  for (const Check& check : *input_.checks) {
+  for (const Check& check : internal::ChecksFailuresFirst(*input_.checks)) {
     not_ok += check.status != CheckStatus::kOk;
     const char* cls = check.status == CheckStatus::kOk ? "yes" : check.status == CheckStatus::kWarning ? "warn" : "bad";
     rows += "<tr><td><code>" + Html(check.name) + "</code></td><td><span class=\"tag " + cls + "\">" +
             Html(CheckStatusName(check.status)) + "</span></td><td>" + Html(check.message) + "</td></tr>\n";
   }
   const std::string summary = not_ok ? "<div class=\"box bad\">" + std::to_string(not_ok) + " plausibility check" +
-                                           (not_ok > 1 ? "s" : "") +
-                                           " did not pass: read these before the numbers below.</div>\n"
+                                           (not_ok > 1 ? "s" : "") + " did not pass (listed first).</div>\n"
                                      : "<div class=\"box ok\">Every plausibility check passed.</div>\n";
   return "<h2 id=\"checks\">Plausibility checks</h2>\n" + summary +
          "<table id=\"checks_table\"><thead><tr><th>check</th><th>status</th><th>message</th></tr></thead><tbody>\n" +
          rows + "</tbody></table>\n";
-}
-
-bool ReportBuilder::AnyCheckNotOk() const {
-  if (!input_.checks) return false;
-  return std::any_of(input_.checks->begin(), input_.checks->end(),
-                     [](const Check& check) { return check.status != CheckStatus::kOk; });
 }
 
 std::string ReportBuilder::WarningsSection() const {
@@ -677,7 +670,8 @@ std::string ReportBuilder::ParametersSection() const {
       } else {
         const bool comparable = value && first_value && first_std && *first_std > 0.0 && !discarded;
         html += "<td class=\"num\">" +
-                (comparable ? FormatValue("%+.2f", (*value - *first_value) / *first_std) : std::string("&ndash;")) + "</td>";
+                (comparable ? FormatValue("%+.2f", (*value - *first_value) / *first_std) : std::string("&ndash;")) +
+                "</td>";
       }
     }
     html += "</tr>\n";
@@ -698,8 +692,8 @@ std::string ReportBuilder::EffectsTable() const {
   for (const EffectParameterEstimate& e : estimates) {
     // Effects that were not estimated are held at their initial value: say so rather than "0 +- 0".
     const std::vector<double> value(e.value.data(), e.value.data() + e.value.size());
-    const std::vector<double> std_dev = e.enabled ? std::vector<double>(e.std.data(), e.std.data() + e.std.size())
-                                                  : std::vector<double>();
+    const std::vector<double> std_dev =
+        e.enabled ? std::vector<double>(e.std.data(), e.std.data() + e.std.size()) : std::vector<double>();
     rows += "<tr><td><code>" + Html(e.name) + "</code></td><td class=\"num" + std::string(e.enabled ? "" : " no") +
             "\">" + internal::ValueWithStd(value, std_dev, internal::EffectParameterUnit(e.name)) + "</td><td>" +
             (e.enabled ? (e.on_bound ? "<span class=\"tag warn\">on its bound</span>"
@@ -801,9 +795,8 @@ std::string ReportBuilder::SpectrumSection() const {
 std::string ReportBuilder::AblationSection() const {
   if (!input_.ablation) return "";
   const std::vector<AblationEntry>& rows = input_.ablation->entries;
-  const bool any_held_out = std::any_of(rows.begin(), rows.end(), [](const AblationEntry& entry) {
-    return !entry.held_out_relative_error_pct.empty();
-  });
+  const bool any_held_out = std::any_of(
+      rows.begin(), rows.end(), [](const AblationEntry& entry) { return !entry.held_out_relative_error_pct.empty(); });
   std::string html =
       "<h2 id=\"ablation\">Ablation</h2>\n<table id=\"ablation_table\"><thead><tr><th rowspan=\"2\">effects</th>"
       "<th class=\"num\" rowspan=\"2\">parameters</th><th class=\"num\" rowspan=\"2\">AIC</th>"
@@ -812,9 +805,8 @@ std::string ReportBuilder::AblationSection() const {
       ComponentHeader(kRotorComponents) + (any_held_out ? ComponentHeader(kRotorComponents) : "") +
       "</tr></thead><tbody>\n";
   for (const AblationEntry& entry : rows)
-    html += "<tr><td>" + Html(AblationLabel(entry)) + "</td><td class=\"num\">" +
-            std::to_string(entry.num_parameters) + "</td><td class=\"num\">" + General(entry.aic) +
-            "</td><td class=\"num\">" + General(entry.bic) + "</td>" +
+    html += "<tr><td>" + Html(AblationLabel(entry)) + "</td><td class=\"num\">" + std::to_string(entry.num_parameters) +
+            "</td><td class=\"num\">" + General(entry.aic) + "</td><td class=\"num\">" + General(entry.bic) + "</td>" +
             ComponentCells(entry.relative_error_pct, kRotorComponents) +
             (any_held_out ? ComponentCells(entry.held_out_relative_error_pct, kRotorComponents) : "") + "</tr>\n";
   html += "</tbody></table>\n";
@@ -833,13 +825,13 @@ std::string ReportBuilder::SettingsSection() const {
 }
 
 std::string ReportBuilder::Page() const {
-  // A diagnosis is read verdict first; failed plausibility checks come before everything.
-  const bool checks_first = AnyCheckNotOk();
+  // Answer first (what was found, the checks in one line with failures first, the next step), then a
+  // diagnosis's verdict, then the evidence; the full checks table near the end.
   const std::string diagnosis =
       input_.diagnosis
           ? internal::DiagnosisHtml(*input_.diagnosis, [this](const std::string& name) { return FigureHtml(name); })
           : "";
-  const std::string sections[] = {checks_first ? ChecksSection() : "",
+  const std::string sections[] = {internal::AnswerHtml(input_),
                                   diagnosis,
                                   FlightsSection(),
                                   WarningsSection(),
@@ -849,7 +841,7 @@ std::string ReportBuilder::Page() const {
                                   WrenchSection(),
                                   SpectrumSection(),
                                   AblationSection(),
-                                  checks_first ? "" : ChecksSection(),
+                                  ChecksSection(),
                                   SettingsSection()};
   std::time_t now = std::time(nullptr);
   char stamp[64] = "";
@@ -863,9 +855,9 @@ std::string ReportBuilder::Page() const {
   if (!input_.command.empty()) html += " &middot; command <code>" + Html(input_.command) + "</code>";
   html += " &middot; written " + Html(stamp) + "</div>\n<nav>";
   const std::pair<const char*, const char*> links[] = {
-      {"checks", "Checks"},         {"diagnosis", "Diagnosis"},      {"flights", "Flights"},  {"warnings", "Warnings"},
+      {"answer", "Answer"},         {"diagnosis", "Diagnosis"},      {"flights", "Flights"},  {"warnings", "Warnings"},
       {"parameters", "Parameters"}, {"fig_parameters", "Estimates"}, {"table3", "Table III"}, {"wrench", "Fig. 3/4"},
-      {"spectra", "Spectra"},       {"ablation", "Ablation"},        {"settings", "Settings"}};
+      {"spectra", "Spectra"},       {"ablation", "Ablation"},        {"checks", "Checks"},    {"settings", "Settings"}};
   for (const auto& [id, text] : links) {
     const std::string anchor = std::string("id=\"") + id + "\"";
     for (const std::string& s : sections)
@@ -909,7 +901,8 @@ void ReportBuilder::RemoveStaleFigures(const std::set<std::string>& written) con
 ReportSummary ReportBuilder::Build() {
   for (const ReportFlight& f : input_.flights)
     if (!f.flight) throw Error("report: flight '" + f.label + "' has no data (null ProcessedFlight)");
-  if (input_.refined && !input_.linear) throw Error("report: a refined result needs its linear result (its parameters)");
+  if (input_.refined && !input_.linear)
+    throw Error("report: a refined result needs its linear result (its parameters)");
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec || !std::filesystem::is_directory(dir_))

@@ -14,6 +14,7 @@
 #include "rotorid/ident/identify.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/refine/refine.h"
+#include "rotorid/core/text.h"
 #include "rotorid/report/checks_json.h"
 #include "rotorid/report/input_json.h"
 #include "rotorid/report/json.h"
@@ -340,8 +341,8 @@ TEST_F(HtmlReportTest, RefineReportShowsTheEffectsInTheirUnitsAndTheHeldOutError
   ASSERT_EQ(combined.size(), 4u);  // identification and held-out, linear and refined
   EXPECT_EQ(combined[3][0], "held-out flights");
   // As `rotorid refine` writes held_out.refined.relative_error_pct.
-  EXPECT_NEAR(CellNumber(combined[3][3]), ComponentsJson(input.relative_errors[1].relative_error_pct)["Mx"].get<double>(),
-              0.0051);
+  EXPECT_NEAR(CellNumber(combined[3][3]),
+              ComponentsJson(input.relative_errors[1].relative_error_pct)["Mx"].get<double>(), 0.0051);
   if (!GnuplotAvailable()) GTEST_SKIP() << "gnuplot is not installed";
   EXPECT_EQ(FigureNames(),
             (std::vector<std::string>{"fig_parameters.svg", "fig_spectrum_held_out.svg",
@@ -495,7 +496,35 @@ TEST_F(HtmlReportTest, AResultTheCommandDidNotGiveIsNotShown) {
   EXPECT_EQ(TableCells(html, "table3_combined").size(), 0u);
 }
 
-TEST_F(HtmlReportTest, ChecksComeFirstWhenOneFailsAndWhatWasReadIsTabulated) {
+// The first screen of a refine report: the refined kt and inertia with their std, the centre of mass
+// as ms / m in mm, the gap on the identification and held-out flights, and the next step.
+TEST_F(HtmlReportTest, TheAnswerGivesTheRefinedParametersWithTheirStdAndTheGap) {
+  const std::string html = Write(RefineInput());
+  const auto rows = TableCells(html, "answer_parameters");
+  ASSERT_GE(rows.size(), 5u);
+  const std::vector<std::string>& names = linear_->system.parameter_names;
+  const auto at = [&](const std::string& name) {
+    return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  const TlsSolution& refined = refined_->refined;
+  EXPECT_EQ(
+      rows[0][1].rfind(FormatValue("%.4g", refined.chi[at("kt")]) + " +- " + ShortNumber(refined.std[at("kt")]), 0), 0u)
+      << rows[0][1];
+  const std::string config = linear_->flights[0].vehicle.name;
+  const double mass = linear_->flights[0].vehicle.mass_kg;
+  const auto com =
+      std::find_if(rows.begin(), rows.end(), [](const auto& r) { return r[0].find("centre of mass") == 0; });
+  ASSERT_NE(com, rows.end());
+  EXPECT_NE((*com)[1].find("z: " + FormatValue("%.4g", refined.chi[at(config + ".ms_z")] * 1e3 / mass)),
+            std::string::npos)
+      << (*com)[1];
+  EXPECT_NE(html.find("On the identification flights (refined, the paper's Table III): Fz"), std::string::npos);
+  EXPECT_NE(html.find("On the held-out flights (refined): Fz"), std::string::npos);
+  EXPECT_NE(html.find("<strong>Next step.</strong> Check the refined model"), std::string::npos);
+  EXPECT_LT(html.find("id=\"answer\""), html.find("id=\"parameters\""));
+}
+
+TEST_F(HtmlReportTest, TheAnswerComesFirstNamingFailedChecksAndWhatWasReadIsTabulated) {
   // checks[] and input.flights[] (INTERFACE.md section 5, v2), from the typed results their writers take.
   ReportInput input = IdentifyInput();
   input.checks = std::vector<Check>{{"gravity_magnitude", CheckStatus::kOk, "9.79 m/s^2 in hover"},
@@ -512,17 +541,24 @@ TEST_F(HtmlReportTest, ChecksComeFirstWhenOneFailsAndWhatWasReadIsTabulated) {
   input.inputs = {train};
   input.validate_inputs = {held};
   std::string html = Write(input);
+  // The first screen: what was found, the failed check named in it, before any other section.
+  ASSERT_NE(html.find("id=\"answer\""), std::string::npos);
+  EXPECT_LT(html.find("id=\"answer\""), html.find("id=\"flights\""));
+  const size_t named = html.find("<code>rotor_order</code> error: rotors 1 and 2 swapped");
+  ASSERT_NE(named, std::string::npos);
+  EXPECT_LT(named, html.find("id=\"flights\""));
+  EXPECT_NE(html.find("1 of 2 plausibility checks did not pass"), std::string::npos);
+  // The full table further down, failures first, each row as checks[] has it.
   ASSERT_NE(html.find("id=\"checks\""), std::string::npos);
-  EXPECT_LT(html.find("id=\"checks\""), html.find("id=\"flights\""));
+  EXPECT_GT(html.find("id=\"checks\""), html.find("id=\"parameters\""));
   const auto checks = TableCells(html, "checks_table");
   const json checks_json = ChecksJson(*input.checks);
   ASSERT_EQ(checks.size(), checks_json.size());
-  for (size_t k = 0; k < checks.size(); ++k) {
-    EXPECT_EQ(checks[k][0], checks_json[k]["name"]);
-    EXPECT_EQ(checks[k][1], checks_json[k]["status"]);
-    EXPECT_EQ(checks[k][2], checks_json[k]["message"]);
-  }
-  EXPECT_EQ(checks[1][1], "error");
+  EXPECT_EQ(checks[0][0], "rotor_order");
+  EXPECT_EQ(checks[0][1], "error");
+  EXPECT_EQ(checks[1][0], checks_json[0]["name"]);
+  EXPECT_EQ(checks[1][1], checks_json[0]["status"]);
+  EXPECT_EQ(checks[1][2], checks_json[0]["message"]);
   // One column per key of input.flights[] entries, in the JSON's order: file first, window_s last.
   const auto read = TableCells(html, "input_flights");
   ASSERT_EQ(read.size(), 2u);
@@ -533,12 +569,13 @@ TEST_F(HtmlReportTest, ChecksComeFirstWhenOneFailsAndWhatWasReadIsTabulated) {
   EXPECT_EQ(read[0][1], "B_train.csv");
   EXPECT_EQ(read[1][1], "B_val.csv");
   EXPECT_NE(std::find(read[0].begin(), read[0].end(), "0, 30"), read[0].end());  // log_span_s
-  EXPECT_EQ(read[0].back(), "-");                                                 // no window
+  EXPECT_EQ(read[0].back(), "-");                                                // no window
   EXPECT_EQ(read[1].back(), "2, 18");
-  // All checks passing: the section moves to the end.
+  // All checks passing: one line says so.
   (*input.checks)[1].status = CheckStatus::kOk;
   html = Write(input);
-  EXPECT_GT(html.find("id=\"checks\""), html.find("id=\"parameters\""));
+  EXPECT_NE(html.find("Every one of the 2 plausibility checks passed"), std::string::npos);
+  EXPECT_LT(html.find("Every one of the 2"), html.find("id=\"flights\""));
 }
 
 TEST_F(HtmlReportTest, WithoutGnuplotTheTablesAreStillWrittenAndTheReasonGiven) {
