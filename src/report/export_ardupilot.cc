@@ -114,7 +114,14 @@ std::vector<ExportedFile> ArduPilotFrame(const ExportModel& model) {
   const double voltage = model.vehicle.command_to_speed_voltage_v.value_or(12.6);
   const double hover_power = std::pow(weight, 1.5) / std::sqrt(2.0 * kSeaLevelAirDensity * disc_area);  // ideal
   nlohmann::ordered_json j;
-  j["_rotorid"] = HeaderLines(model, ArduPilotHeader(model, frame->name, w, expo));
+  ExportHeader header = ArduPilotHeader(model, frame->name, w, expo);
+  // The autopilot's own parameters that must agree with the frame (FRAME_CLASS 1 quad, 2 hexa;
+  // FRAME_TYPE 0 plus, 1 X).
+  header.holds.push_back("autopilot parameters to match: FRAME_CLASS " + std::string(n == 4 ? "1" : "2") +
+                         ", FRAME_TYPE " + (frame->name[0] == '+' || std::string(frame->name) == "hexa" ? "0" : "1") +
+                         ", MOT_THST_EXPO " + FormatValue("%.4f", expo) + ", MOT_THST_HOVER " +
+                         FormatValue("%.4f", hover_command) + ", MOT_SPIN_MIN 0.15, MOT_SPIN_MAX 0.95");
+  j["_rotorid"] = HeaderLines(model, header);
   j["mass"] = Checked("mass", p.mass_kg);
   j["diagonal_size"] = Checked("diagonal_size", diagonal);
   j["refSpd"] = Checked("refSpd", ref_speed);
