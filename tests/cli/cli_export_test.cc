@@ -184,6 +184,46 @@ TEST(CliExportTest, IdentifyReportWithDiscardedParameters) {
   EXPECT_NE(Slurp(dir + "/out.yaml").find("# value: B.I_zz = 0.05: given by the user"), std::string::npos);
 }
 
+// Real flights (skipped without ../shared/data/real): a Crazyflie identify report discards kd (refused
+// by name; with a thrust-stand kd every format is written, the X layout in SIH's and ArduPilot's motor
+// order); the TU Delft throw fails its relative-error check (refused until --force).
+TEST(CliExportTest, RealCrazyflieAndTuDelftFlights) {
+  const auto cf = testing::SharedDataPath("real/crazyflie-imrc-rpm/brushed/raw/jana01");
+  const auto td = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!cf || !td) GTEST_SKIP() << "no real flights under ../shared/data/real";
+  const std::string dir = MakeTempDir("rotorid-export-real");
+  const std::string cf_vehicle = testing::SourceDir() + "/data/vehicles/crazyflie21_brushed.yaml";
+  const std::string td_vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
+  ASSERT_EQ(RunRotorid({"identify", "--vehicle", cf_vehicle, "--log", *cf, "--allow-partial", "--json",
+                        dir + "/cf.json", "-q"})
+                .exit_code,
+            0);
+  const auto no_kd = RunRotorid({"export", "--params", dir + "/cf.json", "--vehicle", cf_vehicle, "--format", "px4-sih",
+                                 "--out", dir + "/cf.sih"});
+  EXPECT_EQ(no_kd.exit_code, 1);
+  EXPECT_NE(no_kd.err.find("does not fix kd"), std::string::npos) << no_kd.err;
+  for (const char* format : {"gz", "gazebo-classic", "px4", "px4-sih", "ardupilot", "yaml"}) {
+    const auto r = RunRotorid({"export", "--params", dir + "/cf.json", "--vehicle", cf_vehicle, "--format", format,
+                               "--out", dir + "/cf." + format, "--set", "kd=1.2e-10", "-q"});
+    EXPECT_EQ(r.exit_code, 0) << format << ": " << r.err;
+  }
+  EXPECT_NE(Slurp(dir + "/cf.px4-sih").find("SIH motor 1 = rotor 3, SIH motor 2 = rotor 4, SIH motor 3 = rotor 2"),
+            std::string::npos);
+
+  const auto id = RunRotorid({"identify", "--vehicle", td_vehicle, "--log", *td, "--cutoff-hz", "30",
+                              "--all-parameters", "--allow-partial", "--json", dir + "/td.json", "-q"});
+  ASSERT_TRUE(id.exit_code == 0 || id.exit_code == 3) << id.err;
+  const bool failed = id.exit_code == 3;
+  const std::vector<std::string> args = {"export",   "--params", dir + "/td.json", "--vehicle",
+                                         td_vehicle, "--format", "px4-sih",        "--max-rotor-speed",
+                                         "5000",     "--out",    dir + "/td.sih"};
+  EXPECT_EQ(RunRotorid(args).exit_code, failed ? 1 : 0);
+  std::vector<std::string> forced = args;
+  forced.push_back("--force");
+  EXPECT_EQ(RunRotorid(forced).exit_code, 0);
+  EXPECT_EQ(Slurp(dir + "/td.sih").find("FAILED CHECK") != std::string::npos, failed);
+}
+
 TEST(CliExportTest, HelpListsEveryFormatAsAChoice) {
   const auto help = RunRotorid({"export", "--help"});
   ASSERT_EQ(help.exit_code, 0);

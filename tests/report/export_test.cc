@@ -185,7 +185,17 @@ FlyingModel ReadArduPilot(const std::string& text, double w) {
     EXPECT_EQ(j.at(key + "vector"), nlohmann::json({0.0, 0.0, -1.0}));
   }
   out.parameters.rotor = {kt, kd};
-  out.rotor_drag = j.at("mdrag_coef").get<double>() * std::sqrt(1.225 * j.at("disc_area").get<double>() / n * kt);
+  const double mdrag = j.at("mdrag_coef"), disc_area = j.at("disc_area");
+  out.rotor_drag = mdrag * std::sqrt(1.225 * disc_area / n * kt);
+  // SITL's Frame::init splits the drag at refSpd, refAngle into momentum and body drag and rescales
+  // mdrag_coef when the momentum share exceeds it: equal shares keep mdrag_coef and no body drag.
+  const double angle = j.at("refAngle").get<double>() * M_PI / 180.0, weight = m * kStandardGravity;
+  const double drag_force = weight * std::tan(angle);
+  const double momentum_drag = std::cos(angle) * mdrag * j.at("refSpd").get<double>() * std::cos(angle) *
+                               std::sqrt(weight / std::cos(angle) * 1.225 * disc_area);
+  EXPECT_NEAR(momentum_drag, drag_force, 1e-12 * weight);
+  EXPECT_EQ(j.at("refRotRate"), 0.0) << "SITL's rotational damping stays off";
+  EXPECT_EQ(j.at("refBatRes"), 0.0);
   return out;
 }
 
