@@ -1,12 +1,10 @@
 #include "rotorid/report/export.h"
 
-#include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
-#include "rotorid/io/atomic_file.h"
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/report/json.h"
 
@@ -61,15 +59,12 @@ Command AddExportCommand(CLI::App& root) {
     if (options->max_rotor_speed_radps > 0.0) export_options.set["max_rotor_speed"] = options->max_rotor_speed_radps;
     for (const std::string& s : options->set) export_options.set.insert(ParseExportSetting(s));
     const ExportFormat format = ParseExportFormat(options->format);
-    const std::vector<ExportedFile> files = ExportFiles(ResolveExportModel(identified, export_options), format);
-    std::error_code error;
-    if (ExportWritesDirectory(format) && (std::filesystem::create_directories(options->out, error), error))
-      throw Error(options->out + ": cannot create the model directory (" + error.message() + ")");
-    for (const ExportedFile& file : files)
-      WriteFileAtomically(file.name.empty() ? options->out : options->out + "/" + file.name, file.text);
-    if (!options->quiet)
-      std::cout << "rotorid export: " << identified.block << " parameters of " << options->params << " as "
-                << ExportFormatName(format) << " -> " << options->out << "\n";
+    const ExportModel model = ResolveExportModel(identified, export_options);
+    WriteExportedFiles(ExportFiles(model, format), options->out, ExportWritesDirectory(format));
+    if (options->quiet) return 0;
+    std::cout << "rotorid export: " << identified.block << " parameters of " << options->params << " as "
+              << ExportFormatName(format) << " -> " << options->out << "\n";
+    for (const std::string& line : model.provenance) std::cout << "  " << line << "\n";
     return 0;
   };
   return command;

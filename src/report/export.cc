@@ -1,8 +1,7 @@
 #include "rotorid/report/export.h"
 
 #include <cmath>
-#include <cstdio>
-#include <iomanip>
+#include <filesystem>
 #include <optional>
 #include <sstream>
 
@@ -11,6 +10,7 @@
 #include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
 #include "rotorid/ident/identify.h"
+#include "rotorid/io/atomic_file.h"
 #include "rotorid/model/physical_consistency.h"
 
 namespace rotorid {
@@ -377,6 +377,14 @@ std::vector<ExportedFile> ExportFiles(const ExportModel& model, ExportFormat for
       return {{"", ModelYaml(model)}};
   }
   return {};
+}
+
+void WriteExportedFiles(const std::vector<ExportedFile>& files, const std::string& out, bool directory) {
+  std::error_code error;
+  if (directory && (std::filesystem::create_directories(out, error), error))
+    throw Error(out + ": cannot create the model directory (" + error.message() + ")");
+  for (const ExportedFile& file : files)
+    WriteFileAtomically(directory && !file.name.empty() ? out + "/" + file.name : out, file.text);
 }
 
 }  // namespace rotorid

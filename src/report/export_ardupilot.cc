@@ -4,6 +4,7 @@
 // static thrust T_max ((1 - e) c + e c^2) with T_max = (m g / N) / hoverThrOut, a yaw torque
 // yaw * c * 0.05 * diagonal_size * T and a momentum drag mdrag_coef sqrt(rho A T) v per motor.
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 

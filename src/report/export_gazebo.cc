@@ -4,7 +4,7 @@
 // inertia at O_d (the rotor links' small share is taken off base_link).
 
 #include <cmath>
-#include <sstream>
+#include <tuple>
 
 #include "export_text.h"
 #include "rotorid/core/error.h"

@@ -62,7 +62,8 @@ std::vector<ExportedFile> Px4Parameters(const ExportModel& model) {
   h.holds = {"no effect itself: the gz model (gz format) holds the motor lag and the rotor drag"};
   h.not_held = {
       "the inertia and the first moment (the simulator's model.sdf has them; PX4 needs only the geometry "
-      "relative to the centre of mass)"};
+      "relative to the centre of mass)",
+      "flapping, battery: neither the PX4 side nor the gz model holds them"};
   ParameterLines out(HeaderLines(model, h));
   out.SetInteger("CA_AIRFRAME", 0);
   out.SetInteger("CA_ROTOR_COUNT", n);

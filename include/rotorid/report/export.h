@@ -138,4 +138,8 @@ struct ExportedFile {
 // hexa only).
 std::vector<ExportedFile> ExportFiles(const ExportModel& model, ExportFormat format);
 
+// Writes `files` atomically: into the directory `out` (created) when `directory`, else the one
+// file to `out`. Throws rotorid::Error naming the path on failure.
+void WriteExportedFiles(const std::vector<ExportedFile>& files, const std::string& out, bool directory);
+
 }  // namespace rotorid
