@@ -23,12 +23,15 @@ struct LinkInertial {
   Eigen::Matrix3d inertia_at_com = Eigen::Matrix3d::Zero();
 };
 
+constexpr double kRotorHeightOverRadius = 0.1;
+
 double RotorDiscRadius(const Vehicle& vehicle) {
   const double arm = vehicle.MeanArm() > 0.0 ? vehicle.MeanArm() : 0.1;
   return vehicle.rotor_radius_m.value_or(0.4 * arm);
 }
 
-// Rotor links as thin discs of a small share of the mass; base_link the rest, checked to be a body
+// Rotor links as short cylinders (height a tenth of the radius: strictly inside the triangle
+// inequalities, unlike a flat disc) of a small share of the mass; base_link the rest, checked to be a body
 // (the share shrinks until it is).
 std::vector<LinkInertial> SplitIntoLinks(const ExportModel& model) {
   const VehicleParameters& p = model.parameters;
@@ -36,13 +39,14 @@ std::vector<LinkInertial> SplitIntoLinks(const ExportModel& model) {
   const double r = RotorDiscRadius(model.vehicle);
   for (double share = 1e-2; share >= 1e-6; share /= 10.0) {
     const double m_rotor = share * p.mass_kg / std::max(n, 1);
-    const Eigen::Matrix3d disc = Eigen::Vector3d(0.25, 0.25, 0.5).asDiagonal() * (m_rotor * r * r);
+    const double lateral = (3.0 + kRotorHeightOverRadius * kRotorHeightOverRadius) / 12.0;
+    const Eigen::Matrix3d cylinder = Eigen::Vector3d(lateral, lateral, 0.5).asDiagonal() * (m_rotor * r * r);
     BodyParameters base = p.body;
     std::vector<LinkInertial> links(1);
     for (const Rotor& rotor : model.vehicle.rotors) {
       base = AddPointMass(base, -m_rotor, rotor.position_m);
-      base.inertia -= disc;
-      links.push_back({rotor.position_m, Eigen::Vector3d::Zero(), m_rotor, disc});
+      base.inertia -= cylinder;
+      links.push_back({rotor.position_m, Eigen::Vector3d::Zero(), m_rotor, cylinder});
     }
     const double m_base = p.mass_kg - n * m_rotor;
     if (!CheckPhysicalConsistency(m_base, base).consistent) continue;
@@ -134,13 +138,14 @@ ExportHeader GazeboHeader(const ExportModel& model, bool gz, double rotor_mass_s
       "motor_lag: timeConstantUp = timeConstantDown = motor_tau_s (first-order filter of the commanded speed; "
       "0 = none, as the model predicts)",
       "rotor_drag: rotorDragCoefficient = rotor_drag_coefficient (the same law, -k |Omega| v_perp at the hub)"};
-  h.not_held = {"flapping_moment_coefficient (" + ShortNumber(model.flapping_moment_coefficient) +
-                    "): the plugin's rollingMoment acts along the in-plane velocity, not about z x v_perp; "
-                    "rollingMomentCoefficient is written 0",
-                "battery: the plugin takes rotor speeds and has no voltage",
-                "rotor_inertia: rotor links spin at 1/rotorVelocitySlowdownSim of the rotor speed; they are thin discs "
-                "holding " +
-                    ShortNumber(100.0 * rotor_mass_share) + " % of the mass (taken off base_link)"};
+  h.not_held = {
+      "flapping_moment_coefficient (" + ShortNumber(model.flapping_moment_coefficient) +
+          "): the plugin's rollingMoment acts along the in-plane velocity, not about z x v_perp; "
+          "rollingMomentCoefficient is written 0",
+      "battery: the plugin takes rotor speeds and has no voltage",
+      "rotor_inertia: rotor links spin at 1/rotorVelocitySlowdownSim of the rotor speed; they are short cylinders "
+      "holding " +
+          ShortNumber(100.0 * rotor_mass_share) + " % of the mass (taken off base_link)"};
   return h;
 }
 
@@ -162,7 +167,8 @@ std::string ModelSdf(const ExportModel& model, bool gz) {
     xml += XmlComment(n + ": rotor " + std::to_string(i + 1) + " of the vehicle file", 4);
     xml += "    <link name=\"" + n + "\">\n" + Element("pose", Vector(n + " position", l.pose_m) + " 0 0 0", 6) +
            Inertial(n, l, 6) + "      <visual name=\"" + n + "_visual\">\n        <geometry><cylinder><radius>" +
-           ExportNumber("rotor radius", radius) + "</radius><length>0.005</length></cylinder></geometry>\n" +
+           ExportNumber("rotor radius", radius) + "</radius><length>" +
+           ExportNumber("rotor height", kRotorHeightOverRadius * radius) + "</length></cylinder></geometry>\n" +
            "      </visual>\n    </link>\n";
     xml += "    <joint name=\"" + n + "_joint\" type=\"revolute\">\n" + Element("parent", "base_link", 6) +
            Element("child", n, 6) + "      <axis>\n" + Element("xyz", "0 0 1", 8) +

@@ -41,7 +41,11 @@ TEST(ExportSdformatTest, GzAndClassicModelsLoadWithoutErrors) {
       EXPECT_EQ(loaded->LinkCount(), static_cast<uint64_t>(n + 1));
       EXPECT_EQ(loaded->JointCount(), static_cast<uint64_t>(n));
       double mass = 0.0;
-      for (uint64_t i = 0; i < loaded->LinkCount(); ++i) mass += loaded->LinkByIndex(i)->Inertial().MassMatrix().Mass();
+      for (uint64_t i = 0; i < loaded->LinkCount(); ++i) {
+        const auto& inertia = loaded->LinkByIndex(i)->Inertial().MassMatrix();
+        EXPECT_TRUE(inertia.IsValid()) << loaded->LinkByIndex(i)->Name() << ": not a possible body for gz-math";
+        mass += inertia.Mass();
+      }
       EXPECT_NEAR(mass, c.vehicle.mass_kg, 1e-12 * c.vehicle.mass_kg);
       EXPECT_EQ(loaded->JointByIndex(0)->Type(), sdf::JointType::REVOLUTE);
     }
