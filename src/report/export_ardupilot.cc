@@ -35,6 +35,7 @@ constexpr double kSeaLevelAirDensity = 1.225;  // kg/m^3, ArduPilot's at refAlt 
 double ThrustExpo(const Vehicle& vehicle) {
   if (!vehicle.command_to_speed) return 1.0;
   const double full = (*vehicle.command_to_speed)(1.0);
+  if (!(full > 0.0)) return 1.0;
   double numerator = 0.0, denominator = 0.0;
   for (int k = 0; k <= 100; ++k) {
     const double u = k / 100.0, f = std::pow((*vehicle.command_to_speed)(u) / full, 2);

@@ -92,6 +92,10 @@ double RequireMaxRotorSpeed(const ExportModel& model, const char* format) {
     throw Error(std::string(format) + ": a rotor speed of " + ShortNumber(w) +
                 " rad/s at full command gives a thrust of " + ShortNumber(thrust) +
                 " N per rotor (not a finite number); give a real --max-rotor-speed");
+  // A bound no rotor reaches (about ten million rpm), which keeps the integer PX4 ESC range in range.
+  if (w > 1e6)
+    throw Error(std::string(format) + ": a rotor speed of " + ShortNumber(w) +
+                " rad/s at full command is no real rotor's (above 1e6 rad/s); give the real --max-rotor-speed");
   const double weight_share = model.parameters.mass_kg * kStandardGravity / model.vehicle.num_rotors();
   if (!(thrust > weight_share))
     throw Error(std::string(format) + ": at " + ShortNumber(w) + " rad/s a rotor gives " + ShortNumber(thrust) +

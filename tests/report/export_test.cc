@@ -403,6 +403,11 @@ TEST(ExportTest, NumbersStayFiniteAndXmlStaysValid) {
     const std::string why = RefusalOf([&] { ExportFiles(huge, f); });
     EXPECT_NE(why.find("not a finite number"), std::string::npos) << ExportFormatName(f) << ": " << why;
   }
+  options.set["max_rotor_speed"] = 1e100;  // finite thrust, but no rotor's speed
+  EXPECT_NE(RefusalOf([&] {
+              ExportFiles(ResolveExportModel(identified, options), ExportFormat::kPx4);
+            }).find("no real rotor's"),
+            std::string::npos);
   options.set["max_rotor_speed"] = 100.0;  // too slow to hover
   EXPECT_NE(RefusalOf([&] {
               ExportFiles(ResolveExportModel(identified, options), ExportFormat::kGz);
