@@ -1,65 +1,21 @@
 #include "rotorid/report/export.h"
 
 #include <cmath>
-#include <iomanip>
+#include <filesystem>
 #include <optional>
 #include <sstream>
 
+#include "export_text.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
+#include "rotorid/core/units.h"
 #include "rotorid/ident/identify.h"
-#include "rotorid/model/parameters.h"
+#include "rotorid/io/atomic_file.h"
+#include "rotorid/model/physical_consistency.h"
 
 namespace rotorid {
 
 namespace {
-
-std::string PreciseNumber(double x) {
-  std::ostringstream out;
-  out << std::setprecision(9) << x;
-  return out.str();
-}
-
-std::string Element(const std::string& name, const std::string& value, int indent) {
-  return std::string(indent, ' ') + "<" + name + ">" + value + "</" + name + ">\n";
-}
-
-// "identified: 0.021 +- 0.002" or "not identified: PX4's default", for the comments of an export.
-std::string Provenance(const IdentifiedModel& model, const std::string& effect, const std::string& fallback) {
-  if (const auto v = model.Effect(effect)) return effect + " identified: " + PreciseNumber(*v);
-  return effect + " not identified: " + fallback;
-}
-
-std::string MotorPlugin(const IdentifiedModel& model, int i) {
-  const Rotor& rotor = model.vehicle.rotors[static_cast<size_t>(i)];
-  const double kt = model.Value("kt");
-  const std::string n = std::to_string(i);
-  std::string xml = "    <!-- rotor " + std::to_string(i + 1) + " at (" + PreciseNumber(rotor.position_m.x()) + ", " +
-                    PreciseNumber(rotor.position_m.y()) + ", " + PreciseNumber(rotor.position_m.z()) + ") m in the body frame -->\n";
-  xml += "    <plugin name=\"rotor_" + n + "_motor_model\" filename=\"libgazebo_motor_model.so\">\n";
-  xml += Element("robotNamespace", "", 6) + Element("jointName", "rotor_" + n + "_joint", 6) +
-         Element("linkName", "rotor_" + n, 6) + Element("turningDirection", rotor.spin > 0 ? "ccw" : "cw", 6);
-  const auto tau = model.Effect("motor_tau_s");
-  xml += "      <!-- " + Provenance(model, "motor_tau_s", "PX4's defaults 0.0125 s up, 0.025 s down") + " -->\n";
-  xml += Element("timeConstantUp", PreciseNumber(tau ? *tau : 0.0125), 6) +
-         Element("timeConstantDown", PreciseNumber(tau ? *tau : 0.025), 6);
-  if (model.max_rotor_speed_radps > 0.0)
-    xml += Element("maxRotVelocity", PreciseNumber(model.max_rotor_speed_radps), 6);
-  else
-    xml += "      <!-- maxRotVelocity: unknown (give --max-rotor-speed or a command_to_speed map) -->\n";
-  xml += Element("motorConstant", PreciseNumber(kt), 6) + Element("momentConstant", PreciseNumber(model.Value("kd") / kt), 6);
-  xml += Element("commandSubTopic", "/gazebo/command/motor_speed", 6) + Element("motorNumber", n, 6);
-  for (const auto& [effect, element] :
-       {std::pair<std::string, std::string>{"rotor_drag_coefficient", "rotorDragCoefficient"},
-        {"flapping_moment_coefficient", "rollingMomentCoefficient"}}) {
-    if (const auto v = model.Effect(effect))
-      xml += Element(element, PreciseNumber(*v), 6);
-    else
-      xml += "      <!-- " + element + ": " + effect + " not identified, the plugin's default applies -->\n";
-  }
-  xml += Element("motorSpeedPubTopic", "/motor_speed/" + n, 6) + Element("rotorVelocitySlowdownSim", "10", 6);
-  return xml + "    </plugin>\n";
-}
 
 // Per-flight first moments: a simulator has one centre of mass, so the export takes their mean.
 void SetMeanFirstMoment(IdentifiedModel* model) {
@@ -82,6 +38,125 @@ void SetMeanFirstMoment(IdentifiedModel* model) {
   model->note = "first moment: the mean of " + std::to_string(owners.size()) + " per-flight first moments (" + config +
                 ".flight<k>.ms_*; std: their spread), whose centres of mass differ by up to " +
                 ShortNumber(1000.0 * spread_m) + " mm along an axis";
+}
+
+// The flight (or measurement) that fixes a parameter the report leaves open.
+std::string HowToFix(const std::string& name, const std::string& config) {
+  if (name == "kd" || name == config + ".I_zz")
+    return "kd and I_zz meet only in the yaw rows, where a symmetric vehicle fixes just their ratio: fly a second "
+           "configuration with a known extra inertia (a mass moved away from the z axis) and identify both together "
+           "(--vehicle A.yaml --log a.csv --vehicle B.yaml --log b.csv, as the paper's A and B), or measure kd on a "
+           "thrust stand";
+  if (name == config + ".I_xx")
+    return "fly roll doublets or a roll multisine (rotor speed differences across the x axis)";
+  if (name == config + ".I_yy")
+    return "fly pitch doublets or a pitch multisine (rotor speed differences across the y axis)";
+  if (name == "kt") return "fly climbs and descents (thrust changes against the known mass)";
+  return "fly manoeuvres that excite all three axes and the thrust";
+}
+
+// --set names: "kd", "I_zz" or "<config>.I_zz", effect parameters, max_rotor_speed.
+std::string CanonicalSetting(const std::string& name, const std::string& config) {
+  for (const char* rotor : kRotorCoefficientNames)
+    if (name == rotor) return name;
+  for (const char* body : kBodyParameterNames)
+    if (name == body || name == config + "." + body) return config + "." + body;
+  for (const char* other : {"motor_tau_s", "rotor_drag_coefficient", "flapping_moment_coefficient", "max_rotor_speed"})
+    if (name == other) return name;
+  throw Error("--set " + name + ": not a parameter of configuration '" + config +
+              "' (kt, kd, ms_x ... I_yz, motor_tau_s, rotor_drag_coefficient, flapping_moment_coefficient, "
+              "max_rotor_speed)");
+}
+
+// Every inertial and rotor parameter the simulator needs, each fixed (see ResolveExportModel).
+void ResolveParameters(const IdentifiedModel& model, const std::map<std::string, double>& set, ExportModel* out) {
+  const std::string config = model.vehicle.name;
+  std::vector<std::string> names(kRotorCoefficientNames.begin(), kRotorCoefficientNames.end());
+  for (const char* body : kBodyParameterNames) names.push_back(config + "." + body);
+  std::map<std::string, double> values;
+  std::vector<std::string> open;
+  for (const std::string& name : names) {
+    const auto given = set.find(name);
+    const auto it = model.parameters.find(name);
+    if (given != set.end()) {
+      values[name] = given->second;
+      out->provenance.push_back(name + " = " + ShortNumber(given->second) + ": given by the user (set option)");
+    } else if (it != model.parameters.end() && it->second.essential) {
+      values[name] = it->second.value;
+    } else if (it != model.parameters.end() && it->second.predicts_with) {
+      values[name] = *it->second.predicts_with;
+      out->provenance.push_back(name + " = " + ShortNumber(values[name]) +
+                                ": discarded as non-essential; the value the model predicts with");
+    } else if (PositiveByPhysics(name)) {
+      open.push_back(name);  // 0 is no kd and no moment of inertia
+    } else {
+      values[name] = it != model.parameters.end() ? it->second.value : 0.0;
+      out->provenance.push_back(name + " = 0: discarded as non-essential; the model predicts with 0");
+    }
+  }
+  if (!open.empty())
+    throw Error(model.source + ": the report does not fix " + Join(open) +
+                " (discarded, and the model predicts with no value of it); " + HowToFix(open.front(), config) +
+                "; or give it with --set " + open.front() + "=VALUE");
+  VehicleParameters& p = out->parameters;
+  p.mass_kg = model.vehicle.mass_kg;
+  p.rotor = {values["kt"], values["kd"]};
+  Eigen::Matrix<double, kNumBodyParameters, 1> chi;
+  for (int k = 0; k < kNumBodyParameters; ++k) chi[k] = values[config + "." + kBodyParameterNames[k]];
+  p.body = BodyParameters::FromVector(chi);
+  for (const char* rotor : kRotorCoefficientNames)
+    if (!(values[rotor] > 0.0) || !std::isfinite(values[rotor]))
+      throw Error(model.source + ": " + rotor + " = " + ShortNumber(values[rotor]) + " is no rotor coefficient (" +
+                  HowToFix(rotor, config) + "; or give it with --set " + rotor + "=VALUE)");
+}
+
+// The body parameters least fixed by the report: the ones not estimated as essential, else the
+// inertia entry with the largest relative std.
+std::string LeastFixedBodyParameter(const IdentifiedModel& model, const std::map<std::string, double>& set) {
+  const std::string config = model.vehicle.name;
+  std::string worst;
+  double worst_rel = -1.0;
+  for (const char* body : {"I_zz", "I_xx", "I_yy", "ms_z", "ms_x", "ms_y"}) {
+    const std::string name = config + "." + body;
+    const auto it = model.parameters.find(name);
+    if (set.count(name) || it == model.parameters.end()) continue;
+    if (!it->second.essential) return name;
+    const double rel = it->second.std / std::max(std::abs(it->second.value), 1e-300);
+    if (rel > worst_rel) worst_rel = rel, worst = name;
+  }
+  return worst.empty() ? config + ".I_zz" : worst;
+}
+
+void CheckBody(const IdentifiedModel& model, const std::map<std::string, double>& set, const ExportModel& out) {
+  const PhysicalConsistency c = CheckPhysicalConsistency(out.parameters.mass_kg, out.parameters.body);
+  if (c.consistent) return;
+  const std::string suspect = LeastFixedBodyParameter(model, set);
+  throw Error(model.source + ": configuration '" + model.vehicle.name +
+              "' with the values the model predicts with is no physically possible body (" + c.problem +
+              "); the least fixed parameter is " + suspect + ": " + HowToFix(suspect, model.vehicle.name) +
+              "; or give it with --set " + suspect + "=VALUE");
+}
+
+// A scalar effect the simulators hold: --set, else the report's value, else 0 (not identified).
+double HeldEffect(const IdentifiedModel& model, const std::map<std::string, double>& set, const std::string& name,
+                  ExportModel* out) {
+  double value = 0.0;
+  if (set.count(name)) {
+    value = set.at(name);
+    out->provenance.push_back(name + " = " + ShortNumber(value) + ": given by the user (set option)");
+  } else if (const auto v = model.Effect(name)) {
+    value = *v;
+  }
+  if (!std::isfinite(value) || value < 0.0)
+    throw Error(model.source + ": " + name + " = " + ShortNumber(value) +
+                " is not physical (it must be >= 0); refine again, or give it with --set " + name + "=VALUE");
+  return value;
+}
+
+// `name = value` of an effect parameter as the report has it (a number or a vector).
+std::string EffectText(const std::string& name, const nlohmann::json& effect) {
+  const nlohmann::json value = effect.value("value", nlohmann::json());
+  return name + " = " + (value.is_number() ? ShortNumber(value.get<double>()) : value.dump());
 }
 
 }  // namespace
@@ -107,9 +182,12 @@ IdentifiedModel IdentifiedModelFromReport(const nlohmann::json& report, const st
     throw Error(source + ": no '" + model.block + ".parameters' (an identify or refine report is needed)");
   for (const auto& [name, entry] : report[model.block]["parameters"].items()) {
     if (!entry.is_object() || !entry.contains("value") || !entry["value"].is_number()) continue;
-    model.parameters[name] = {entry["value"].get<double>(),
-                              entry.contains("std") && entry["std"].is_number() ? entry["std"].get<double>() : 0.0,
-                              entry.value("essential", true)};
+    ExportedValue v{entry["value"].get<double>(),
+                    entry.contains("std") && entry["std"].is_number() ? entry["std"].get<double>() : 0.0,
+                    entry.value("essential", true)};
+    if (entry.contains("predicts_with") && entry["predicts_with"].is_number())
+      v.predicts_with = entry["predicts_with"].get<double>();
+    model.parameters[name] = v;
   }
   if (!(model.Value("kt") > 0.0)) throw Error(source + ": the report has no positive kt");
   if (!model.parameters.count(vehicle.name + ".I_xx"))
@@ -120,102 +198,193 @@ IdentifiedModel IdentifiedModelFromReport(const nlohmann::json& report, const st
     for (const auto& [name, effect] : report["refined"]["effects"].items())
       if (effect.value("enabled", true)) model.effects[name] = effect;
   if (vehicle.command_to_speed) model.max_rotor_speed_radps = (*vehicle.command_to_speed)(1.0);
+  if (report.contains("checks") && report["checks"].is_array())
+    for (const nlohmann::json& check : report["checks"])
+      if (check.is_object() && check.value("status", "") == "error")
+        model.failed_checks.push_back({check.value("name", "?"), check.value("message", "")});
   return model;
 }
 
-MassProperties MassPropertiesOf(const IdentifiedModel& model) {
+MassProperties MassPropertiesOf(double mass_kg, const BodyParameters& body) {
   MassProperties p;
-  const std::string c = model.vehicle.name + ".";
-  p.mass_kg = model.vehicle.mass_kg;
-  const Eigen::Vector3d ms(model.Value(c + "ms_x"), model.Value(c + "ms_y"), model.Value(c + "ms_z"));
-  p.centre_of_mass_m = ms / p.mass_kg;
-  Eigen::Matrix3d inertia;
-  inertia << model.Value(c + "I_xx"), model.Value(c + "I_xy"), model.Value(c + "I_xz"), model.Value(c + "I_xy"),
-      model.Value(c + "I_yy"), model.Value(c + "I_yz"), model.Value(c + "I_xz"), model.Value(c + "I_yz"),
-      model.Value(c + "I_zz");
+  p.mass_kg = mass_kg;
+  p.centre_of_mass_m = body.first_moment / mass_kg;
   const Eigen::Vector3d& r = p.centre_of_mass_m;
-  p.inertia_at_com = inertia - p.mass_kg * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+  p.inertia_at_com = body.inertia - mass_kg * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
   return p;
 }
 
-std::string GazeboSdf(const IdentifiedModel& model) {
-  const MassProperties p = MassPropertiesOf(model);
-  const Eigen::Matrix3d& I = p.inertia_at_com;
-  std::string xml = "<?xml version=\"1.0\"?>\n<!-- rotorid export: " + model.source + " (" + model.block +
-                    " parameters), vehicle '" + model.vehicle.name +
-                    "'. Inertia about the centre of mass, in the "
-                    "body frame (FLU)." +
-                    (model.note.empty() ? "" : " " + model.note + ".") +
-                    " -->\n<sdf version=\"1.6\">\n  <model name=\"" + model.vehicle.name + "\">\n";
-  xml += "    <link name=\"base_link\">\n      <inertial>\n";
-  xml += Element("pose",
-                 PreciseNumber(p.centre_of_mass_m.x()) + " " + PreciseNumber(p.centre_of_mass_m.y()) + " " +
-                     PreciseNumber(p.centre_of_mass_m.z()) + " 0 0 0",
-                 8);
-  xml += Element("mass", PreciseNumber(p.mass_kg), 8) + "        <inertia>\n";
-  xml += Element("ixx", PreciseNumber(I(0, 0)), 10) + Element("ixy", PreciseNumber(I(0, 1)), 10) +
-         Element("ixz", PreciseNumber(I(0, 2)), 10) + Element("iyy", PreciseNumber(I(1, 1)), 10) +
-         Element("iyz", PreciseNumber(I(1, 2)), 10) + Element("izz", PreciseNumber(I(2, 2)), 10);
-  xml += "        </inertia>\n      </inertial>\n    </link>\n";
-  for (int i = 0; i < model.vehicle.num_rotors(); ++i) xml += MotorPlugin(model, i);
-  return xml + "  </model>\n</sdf>\n";
+MassProperties MassPropertiesOf(const IdentifiedModel& model) {
+  const std::string c = model.vehicle.name + ".";
+  Eigen::Matrix<double, kNumBodyParameters, 1> chi;
+  for (int k = 0; k < kNumBodyParameters; ++k) chi[k] = model.Value(c + kBodyParameterNames[k]);
+  return MassPropertiesOf(model.vehicle.mass_kg, BodyParameters::FromVector(chi));
 }
 
-std::string Px4SihParameters(const IdentifiedModel& model) {
-  if (!(model.max_rotor_speed_radps > 0.0))
-    throw Error(
-        "px4-sih needs the rotor speed at full command for SIH_T_MAX and SIH_Q_MAX: give --max-rotor-speed "
-        "or a command_to_speed map in the vehicle file");
-  const MassProperties p = MassPropertiesOf(model);
-  // SIH works in FRD: F = diag(1, -1, -1) flips the xy and xz products of inertia.
-  const Eigen::Matrix3d F = Eigen::Vector3d(1, -1, -1).asDiagonal();
-  const Eigen::Matrix3d I = F * p.inertia_at_com * F;
-  double arm_x = 0.0, arm_y = 0.0;
-  for (const Rotor& r : model.vehicle.rotors) {
-    arm_x += std::abs(r.position_m.x()) / model.vehicle.num_rotors();
-    arm_y += std::abs(r.position_m.y()) / model.vehicle.num_rotors();
+double ExportModel::HoverRotorSpeedRadps() const {
+  return std::sqrt(parameters.mass_kg * kStandardGravity / (vehicle.num_rotors() * parameters.rotor.kt));
+}
+
+ExportModel ResolveExportModel(const IdentifiedModel& model, const ExportOptions& options) {
+  if (!model.failed_checks.empty() && !options.force) {
+    std::vector<std::string> names;
+    for (const FailedCheck& c : model.failed_checks) names.push_back(c.name);
+    throw Error(model.source + ": the report failed its checks (" + Join(names) + ": " +
+                model.failed_checks.front().message +
+                "); fix the input, or export anyway with --force (the failing checks go into the file's header)");
   }
-  const double w2 = model.max_rotor_speed_radps * model.max_rotor_speed_radps;
-  std::string out = "# rotorid export: " + model.source + " (" + model.block + " parameters), vehicle '" +
-                    model.vehicle.name + "', max rotor speed " + PreciseNumber(model.max_rotor_speed_radps) + " rad/s\n";
-  if (!model.note.empty()) out += "# " + model.note + "\n";
-  const auto set = [&out](const std::string& name, double value) {
-    out += "param set " + name + " " + PreciseNumber(value) + "\n";
-  };
-  set("SIH_MASS", p.mass_kg);
-  set("SIH_IXX", I(0, 0));
-  set("SIH_IYY", I(1, 1));
-  set("SIH_IZZ", I(2, 2));
-  set("SIH_IXY", I(0, 1));
-  set("SIH_IXZ", I(0, 2));
-  set("SIH_IYZ", I(1, 2));
-  set("SIH_T_MAX", model.Value("kt") * w2);
-  set("SIH_Q_MAX", model.Value("kd") * w2);
-  set("SIH_L_ROLL", arm_y);
-  set("SIH_L_PITCH", arm_x);
-  if (const auto tau = model.Effect("motor_tau_s")) set("SIH_T_TAU", *tau);
+  std::map<std::string, double> set;
+  for (const auto& [name, value] : options.set) {
+    if (!std::isfinite(value)) throw Error("--set " + name + ": not a finite number");
+    set[CanonicalSetting(name, model.vehicle.name)] = value;
+  }
+  ExportModel out;
+  out.source = model.source;
+  out.block = model.block;
+  out.vehicle = model.vehicle;
+  out.failed_checks = model.failed_checks;
+  out.report_parameters = model.parameters;
+  out.report_effects = model.effects;
+  out.note = model.note;
+  if (!model.note.empty()) out.provenance.push_back(model.note);
+  ResolveParameters(model, set, &out);
+  CheckBody(model, set, out);
+  out.motor_tau_s = HeldEffect(model, set, "motor_tau_s", &out);
+  out.rotor_drag_coefficient = HeldEffect(model, set, "rotor_drag_coefficient", &out);
+  out.flapping_moment_coefficient = HeldEffect(model, set, "flapping_moment_coefficient", &out);
+  out.max_rotor_speed_radps = set.count("max_rotor_speed") ? set.at("max_rotor_speed") : model.max_rotor_speed_radps;
+  for (const auto& [name, effect] : model.effects.items())
+    if (name != "motor_tau_s" && name != "rotor_drag_coefficient" && name != "flapping_moment_coefficient")
+      out.other_effects.push_back(EffectText(name, effect));
   return out;
 }
 
-std::string ModelYaml(const IdentifiedModel& model) {
+std::pair<std::string, double> ParseExportSetting(const std::string& assignment) {
+  const size_t eq = assignment.find('=');
+  size_t used = 0;
+  double value = 0.0;
+  try {
+    if (eq != std::string::npos) value = std::stod(assignment.substr(eq + 1), &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (eq == std::string::npos || eq == 0 || used == 0 || used != assignment.size() - eq - 1 || !std::isfinite(value))
+    throw Error("--set " + assignment + ": expected NAME=VALUE with a finite number (e.g. kd=1.2e-8)");
+  return {assignment.substr(0, eq), value};
+}
+
+std::vector<std::string> ExportFormatNames() {
+  return {"gz", "gazebo-classic", "px4", "px4-sih", "ardupilot", "yaml", "gazebo"};
+}
+
+ExportFormat ParseExportFormat(const std::string& name) {
+  if (name == "gz") return ExportFormat::kGz;
+  if (name == "gazebo-classic" || name == "gazebo") return ExportFormat::kGazeboClassic;
+  if (name == "px4") return ExportFormat::kPx4;
+  if (name == "px4-sih") return ExportFormat::kPx4Sih;
+  if (name == "ardupilot") return ExportFormat::kArduPilot;
+  if (name == "yaml") return ExportFormat::kYaml;
+  throw Error("unknown export format '" + name + "' (" + Join(ExportFormatNames()) + ")");
+}
+
+const char* ExportFormatName(ExportFormat format) {
+  switch (format) {
+    case ExportFormat::kGz:
+      return "gz";
+    case ExportFormat::kGazeboClassic:
+      return "gazebo-classic";
+    case ExportFormat::kPx4:
+      return "px4";
+    case ExportFormat::kPx4Sih:
+      return "px4-sih";
+    case ExportFormat::kArduPilot:
+      return "ardupilot";
+    case ExportFormat::kYaml:
+      return "yaml";
+  }
+  return "?";
+}
+
+bool ExportWritesDirectory(ExportFormat format) {
+  return format == ExportFormat::kGz || format == ExportFormat::kGazeboClassic;
+}
+
+namespace {
+
+// Every parameter of the report with its std, and the resolved model a simulator would get.
+std::string ModelYaml(const ExportModel& model) {
+  using internal::ExportNumber;
+  internal::ExportHeader header{"rotorid model YAML (every resolved number, for scripts)",
+                                "SI: kg, m, kg m^2, N s^2, N m s^2, rad/s, s; body frame F_d (FLU, origin at the rotor "
+                                "cross), inertia at O_d",
+                                "none: rotor speeds in rad/s (the vehicle file's command_to_speed, if any, is copied)",
+                                {"every effect the report holds, with its value"},
+                                {}};
   std::ostringstream out;
-  out << std::setprecision(12);
-  out << "# rotorid export: every parameter and effect with its std\nsource: \"" << model.source
-      << "\"\nblock: " << model.block << "\nvehicle: " << model.vehicle.name << "\nmass: " << model.vehicle.mass_kg
-      << "\n";
-  if (!model.note.empty()) out << "note: \"" << model.note << "\"\n";
+  for (const std::string& line : internal::HeaderLines(model, header)) out << "# " << line << "\n";
+  const VehicleParameters& p = model.parameters;
+  const Eigen::Matrix3d& I = p.body.inertia;
+  const Eigen::Vector3d& ms = p.body.first_moment;
+  out << "source: " << nlohmann::json(model.source).dump() << "\nblock: " << model.block
+      << "\nvehicle: " << nlohmann::json(model.vehicle.name).dump() << "\n";
+  if (!model.note.empty()) out << "note: " << nlohmann::json(model.note).dump() << "\n";
+  out << "mass: " << ExportNumber("mass", p.mass_kg) << "\nkt: " << ExportNumber("kt", p.rotor.kt)
+      << "\nkd: " << ExportNumber("kd", p.rotor.kd) << "\nfirst_moment: [" << ExportNumber("ms_x", ms.x()) << ", "
+      << ExportNumber("ms_y", ms.y()) << ", " << ExportNumber("ms_z", ms.z()) << "]\ninertia: [";
+  for (int r = 0; r < 3; ++r)
+    out << (r ? ", " : "") << "[" << ExportNumber("inertia", I(r, 0)) << ", " << ExportNumber("inertia", I(r, 1))
+        << ", " << ExportNumber("inertia", I(r, 2)) << "]";
+  const Eigen::Vector3d c = model.Mass().centre_of_mass_m;
+  out << "]\ncentre_of_mass: [" << ExportNumber("c", c.x()) << ", " << ExportNumber("c", c.y()) << ", "
+      << ExportNumber("c", c.z()) << "]\nmotor_tau_s: " << ExportNumber("motor_tau_s", model.motor_tau_s)
+      << "\nrotor_drag_coefficient: " << ExportNumber("rotor_drag_coefficient", model.rotor_drag_coefficient)
+      << "\nflapping_moment_coefficient: "
+      << ExportNumber("flapping_moment_coefficient", model.flapping_moment_coefficient)
+      << "\nmax_rotor_speed: " << ExportNumber("max_rotor_speed", model.max_rotor_speed_radps) << "\nrotors:\n";
+  for (const Rotor& r : model.vehicle.rotors)
+    out << "  - {position: [" << ExportNumber("position", r.position_m.x()) << ", "
+        << ExportNumber("position", r.position_m.y()) << ", " << ExportNumber("position", r.position_m.z())
+        << "], spin: " << r.spin << "}\n";
   out << "parameters:\n";
-  for (const auto& [name, v] : model.parameters)
-    out << "  " << name << ": {value: " << v.value << ", std: " << v.std
-        << ", essential: " << (v.essential ? "true" : "false") << "}\n";
-  out << "effects:" << (model.effects.empty() ? " {}" : "") << "\n";
-  for (const auto& [name, e] : model.effects.items())
+  for (const auto& [name, v] : model.report_parameters) {
+    out << "  " << name << ": {value: " << ExportNumber(name, v.value) << ", std: " << ExportNumber(name, v.std)
+        << ", essential: " << (v.essential ? "true" : "false");
+    if (v.predicts_with) out << ", predicts_with: " << ExportNumber(name, *v.predicts_with);
+    out << "}\n";
+  }
+  out << "effects:" << (model.report_effects.empty() ? " {}" : "") << "\n";
+  for (const auto& [name, e] : model.report_effects.items())
     out << "  " << name << ": {value: " << e.value("value", nlohmann::json()).dump()
         << ", std: " << e.value("std", nlohmann::json()).dump() << "}\n";
-  const MassProperties p = MassPropertiesOf(model);
-  out << "centre_of_mass: [" << p.centre_of_mass_m.x() << ", " << p.centre_of_mass_m.y() << ", "
-      << p.centre_of_mass_m.z() << "]\n";
   return out.str();
+}
+
+}  // namespace
+
+std::vector<ExportedFile> ExportFiles(const ExportModel& model, ExportFormat format) {
+  switch (format) {
+    case ExportFormat::kGz:
+      return internal::GzModel(model);
+    case ExportFormat::kGazeboClassic:
+      return internal::GazeboClassicModel(model);
+    case ExportFormat::kPx4:
+      return internal::Px4Parameters(model);
+    case ExportFormat::kPx4Sih:
+      return internal::Px4SihParameters(model);
+    case ExportFormat::kArduPilot:
+      return internal::ArduPilotFrame(model);
+    case ExportFormat::kYaml:
+      return {{"", ModelYaml(model)}};
+  }
+  return {};
+}
+
+void WriteExportedFiles(const std::vector<ExportedFile>& files, const std::string& out, bool directory) {
+  std::error_code error;
+  if (directory && (std::filesystem::create_directories(out, error), error))
+    throw Error(out + ": cannot create the model directory (" + error.message() + ")");
+  for (const ExportedFile& file : files)
+    WriteFileAtomically(directory && !file.name.empty() ? out + "/" + file.name : out, file.text);
 }
 
 }  // namespace rotorid

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -62,53 +62,53 @@ TEST(CliExportTest, ExportsRoundTrip) {
   const double kt = value("kt"), kd = value("kd"), tau = report["refined"]["effects"]["motor_tau_s"]["value"];
   const Vehicle vehicle = ReadVehicleYaml(dir + "/B.yaml");
   const double m = vehicle.mass_kg;
-  // Inertia about the centre of mass, computed here independently: I_c = I_O - m (|c|^2 E - c c^T).
-  const Eigen::Vector3d c = Eigen::Vector3d(value("B.ms_x"), value("B.ms_y"), value("B.ms_z")) / m;
-  const double ixx_c = value("B.I_xx") - m * (c.y() * c.y() + c.z() * c.z());
-  const double ixy_c = value("B.I_xy") + m * c.x() * c.y();
-  const double izz_c = value("B.I_zz") - m * (c.x() * c.x() + c.y() * c.y());
-
-  for (const char* format : {"gazebo", "px4-sih", "yaml"}) {
-    const auto r = RunRotorid({"export", "--params", dir + "/r.json", "--vehicle", dir + "/B.yaml", "--format", format,
-                               "--max-rotor-speed", "900", "--out", dir + "/model." + format});
+  const auto run = [&](const std::string& format, const std::string& out, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"export",   "--params", dir + "/r.json",     "--vehicle", dir + "/B.yaml",
+                                     "--format", format,     "--max-rotor-speed", "1200",      "--out",
+                                     out,        "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunRotorid(args);
+  };
+  for (const char* format : {"gz", "gazebo-classic", "gazebo", "px4", "ardupilot", "yaml"}) {
+    const auto r = run(format, dir + "/model." + format);
     ASSERT_EQ(r.exit_code, 0) << format << ": " << r.err;
   }
-  const auto sdf = ParseSdf(dir + "/model.gazebo");
-  if (!sdf) GTEST_SKIP() << "python3 cannot parse the SDF (python3 missing?)";
-  const std::string link = "/sdf/model[B]/link[base_link]/inertial";
-  EXPECT_DOUBLE_EQ(Number(*sdf, link + "/mass"), m);
-  EXPECT_NEAR(Number(*sdf, link + "/inertia/ixx"), ixx_c, 1e-8 * std::abs(ixx_c) + 1e-12);
-  EXPECT_NEAR(Number(*sdf, link + "/inertia/ixy"), ixy_c, 1e-8 * std::abs(ixy_c) + 1e-12);
-  EXPECT_NEAR(Number(*sdf, link + "/inertia/izz"), izz_c, 1e-8 * std::abs(izz_c) + 1e-12);
-  std::istringstream pose(sdf->at(link + "/pose").get<std::string>());
-  double px = 0, py = 0, pz = 0;
-  pose >> px >> py >> pz;
-  EXPECT_NEAR(px, c.x(), 1e-8);
-  EXPECT_NEAR(pz, c.z(), 1e-8);
-  for (int i = 0; i < vehicle.num_rotors(); ++i) {
-    const std::string plugin = "/sdf/model[B]/plugin[rotor_" + std::to_string(i) + "_motor_model]/";
-    EXPECT_NEAR(Number(*sdf, plugin + "motorConstant"), kt, 1e-8 * kt);
-    EXPECT_NEAR(Number(*sdf, plugin + "momentConstant"), kd / kt, 1e-8 * kd / kt);
-    EXPECT_NEAR(Number(*sdf, plugin + "timeConstantUp"), tau, 1e-8 * tau);
-    EXPECT_DOUBLE_EQ(Number(*sdf, plugin + "maxRotVelocity"), 900.0);
-    EXPECT_EQ(sdf->at(plugin + "turningDirection"), vehicle.rotors[static_cast<size_t>(i)].spin > 0 ? "ccw" : "cw");
-    EXPECT_EQ(sdf->count(plugin + "rotorDragCoefficient"), 0u) << "not identified, so not written";
-  }
+  // B is a plus quad: SIH flies X layouts only, and says so.
+  const auto sih = run("px4-sih", dir + "/model.sih");
+  EXPECT_EQ(sih.exit_code, 1);
+  EXPECT_NE(sih.err.find("plus layout"), std::string::npos) << sih.err;
 
-  std::map<std::string, double> sih;
-  std::istringstream lines(Slurp(dir + "/model.px4-sih"));
-  for (std::string line; std::getline(lines, line);) {
-    std::istringstream words(line);
-    std::string param, set, name;
-    double x = 0;
-    if (words >> param >> set >> name >> x && param == "param") sih[name] = x;
+  // The gz model directory, read by a strict XML parser: the links add up to the identified body.
+  for (const char* format : {"gz", "gazebo-classic"}) {
+    const auto sdf = ParseSdf(dir + "/model." + format + "/model.sdf");
+    if (!sdf) GTEST_SKIP() << "python3 cannot parse the SDF (python3 missing?)";
+    EXPECT_TRUE(ParseSdf(dir + "/model." + format + "/model.config")) << "model.config is no XML";
+    double mass = 0.0;
+    for (const std::string link : {"base_link", "rotor_0", "rotor_1", "rotor_2", "rotor_3"})
+      mass += Number(*sdf, "/sdf/model[B]/link[" + link + "]/inertial/mass");
+    EXPECT_NEAR(mass, m, 1e-12);
+    const std::string plugin =
+        std::string("/sdf/model[B]/plugin[") +
+        (std::string(format) == "gz" ? "gz::sim::systems::MulticopterMotorModel" : "rotor_3_motor_model") + "]/";
+    EXPECT_NEAR(Number(*sdf, plugin + "motorConstant"), kt, 1e-12 * kt);
+    EXPECT_NEAR(Number(*sdf, plugin + "momentConstant"), kd / kt, 1e-12 * kd / kt);
+    EXPECT_NEAR(Number(*sdf, plugin + "timeConstantUp"), tau, 1e-12 * tau);
+    EXPECT_DOUBLE_EQ(Number(*sdf, plugin + "maxRotVelocity"), 1200.0);
   }
-  EXPECT_NEAR(sih.at("SIH_T_MAX"), kt * 900 * 900, 1e-6 * kt * 900 * 900);
-  EXPECT_NEAR(sih.at("SIH_Q_MAX"), kd * 900 * 900, 1e-6 * kd * 900 * 900);
-  EXPECT_NEAR(sih.at("SIH_IXX"), ixx_c, 1e-8 * std::abs(ixx_c) + 1e-12);
-  EXPECT_NEAR(sih.at("SIH_IXY"), -ixy_c, 1e-8 * std::abs(ixy_c) + 1e-12);  // FRD
-  EXPECT_NEAR(sih.at("SIH_T_TAU"), tau, 1e-8 * tau);
-  EXPECT_DOUBLE_EQ(sih.at("SIH_MASS"), m);
+  EXPECT_EQ(Slurp(dir + "/model.gazebo/model.sdf"), Slurp(dir + "/model.gazebo-classic/model.sdf"));
+
+  const nlohmann::json frame = nlohmann::json::parse(Slurp(dir + "/model.ardupilot"));
+  // Every key ArduPilot SITL's frame loader (SIM_Frame.cpp, load_frame_params) reads for a multicopter.
+  for (const char* key : {"mass",       "diagonal_size", "refSpd",     "refAngle",       "refVoltage", "refCurrent",
+                          "refAlt",     "refTempC",      "maxVoltage", "battCapacityAh", "refBatRes",  "propExpo",
+                          "refRotRate", "hoverThrOut",   "pwmMin",     "pwmMax",         "spin_min",   "spin_max",
+                          "slew_max",   "disc_area",     "mdrag_coef", "moment_inertia", "num_motors"})
+    EXPECT_TRUE(frame.contains(key)) << key;
+  for (int k = 1; k <= 4; ++k)
+    for (const char* key : {"_position", "_vector", "_yaw"})
+      EXPECT_TRUE(frame.contains("motor" + std::to_string(k) + key)) << k << key;
+  EXPECT_DOUBLE_EQ(frame["mass"].get<double>(), m);
+  EXPECT_NEAR(frame["hoverThrOut"].get<double>(), m * 9.80665 / (4 * kt * 1200 * 1200), 1e-12);
 
   const YAML::Node yaml = YAML::LoadFile(dir + "/model.yaml");
   for (const auto& [name, entry] : p.items()) {
@@ -121,16 +121,117 @@ TEST(CliExportTest, ExportsRoundTrip) {
   }
   EXPECT_NEAR(yaml["effects"]["motor_tau_s"]["value"].as<double>(), tau, 1e-10 * tau);
   EXPECT_FALSE(yaml["effects"]["delay_s"]) << "an effect not estimated is not exported";
+  EXPECT_NE(Slurp(dir + "/model.px4").find("param set SIM_GZ_EC_MAX4 1200\n"), std::string::npos);
 
-  // SIH needs the rotor speed at full command: without it (and without a command_to_speed map), exit 1.
-  const auto no_speed = RunRotorid({"export", "--params", dir + "/r.json", "--vehicle", dir + "/B.yaml", "--format",
-                                    "px4-sih", "--out", dir + "/x.sih"});
+  // Without the rotor speed at full command (and no command_to_speed map): exit 1 saying how to give it.
+  const auto no_speed = RunRotorid(
+      {"export", "--params", dir + "/r.json", "--vehicle", dir + "/B.yaml", "--format", "gz", "--out", dir + "/x"});
   EXPECT_EQ(no_speed.exit_code, 1);
   EXPECT_NE(no_speed.err.find("--max-rotor-speed"), std::string::npos) << no_speed.err;
-  EXPECT_EQ(RunRotorid({"export", "--params", dir + "/r.json", "--vehicle", dir + "/B.yaml", "--format", "urdf",
-                        "--out", dir + "/x"})
+  const auto huge = RunRotorid({"export", "--params", dir + "/r.json", "--vehicle", dir + "/B.yaml", "--format", "px4",
+                                "--max-rotor-speed", "1e200", "--out", dir + "/x.px4"});
+  EXPECT_EQ(huge.exit_code, 1);
+  EXPECT_NE(huge.err.find("not a finite number"), std::string::npos) << huge.err;
+  EXPECT_EQ(run("urdf", dir + "/x").exit_code, 2);
+  EXPECT_EQ(run("gz", dir + "/x", {"--set", "kd"}).exit_code, 2);
+
+  // A report that failed a check: refused naming it, or with --force written into the header.
+  nlohmann::json failed = report;
+  failed["checks"].push_back({{"name", "gravity_magnitude"}, {"status", "error"}, {"message", "12.3 m/s^2 in hover"}});
+  std::ofstream(dir + "/failed.json") << failed.dump();
+  const auto refused = RunRotorid({"export", "--params", dir + "/failed.json", "--vehicle", dir + "/B.yaml", "--format",
+                                   "px4", "--max-rotor-speed", "1200", "--out", dir + "/f.px4"});
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find("gravity_magnitude"), std::string::npos) << refused.err;
+  const auto forced = RunRotorid({"export", "--params", dir + "/failed.json", "--vehicle", dir + "/B.yaml", "--format",
+                                  "px4", "--max-rotor-speed", "1200", "--out", dir + "/f.px4", "--force"});
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_NE(Slurp(dir + "/f.px4").find("# FAILED CHECK (exported anyway: forced): gravity_magnitude"),
+            std::string::npos);
+}
+
+// The bundled identify report of B (data/sim) discards kd and I_zz: the export names them, the
+// flight that fixes them and --set; given both, every format B can fly is written.
+TEST(CliExportTest, IdentifyReportWithDiscardedParameters) {
+  const std::string dir = MakeTempDir("rotorid-export-id");
+  const std::string vehicle = testing::SourceDir() + "/data/sim/B.yaml";
+  const auto id = RunRotorid({"identify", "--vehicle", vehicle, "--log", testing::SourceDir() + "/data/sim/B_train.csv",
+                              "--json", dir + "/id.json", "-q"});
+  ASSERT_EQ(id.exit_code, 0) << id.err;
+  const nlohmann::json p = nlohmann::json::parse(Slurp(dir + "/id.json"))["linear"]["parameters"];
+  ASSERT_FALSE(p["kd"]["essential"].get<bool>());
+  ASSERT_FALSE(p["B.I_zz"]["essential"].get<bool>());
+  const auto run = [&](const std::string& format, std::vector<std::string> extra) {
+    std::vector<std::string> args = {
+        "export", "--params", dir + "/id.json",      "--vehicle", vehicle, "--format", format, "--max-rotor-speed",
+        "1200",   "--out",    dir + "/out." + format};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunRotorid(args);
+  };
+  const auto no_kd = run("gz", {});
+  EXPECT_EQ(no_kd.exit_code, 1);
+  EXPECT_NE(no_kd.err.find("does not fix kd"), std::string::npos) << no_kd.err;
+  EXPECT_NE(no_kd.err.find("second configuration"), std::string::npos) << no_kd.err;
+  // I_zz is predicted with an estimate too small for any body with B's I_xx and I_yy.
+  const auto bad_izz = run("gz", {"--set", "kd=5.1e-8"});
+  EXPECT_EQ(bad_izz.exit_code, 1);
+  EXPECT_NE(bad_izz.err.find("no physically possible body"), std::string::npos) << bad_izz.err;
+  EXPECT_NE(bad_izz.err.find("B.I_zz"), std::string::npos) << bad_izz.err;
+  for (const char* format : {"gz", "gazebo-classic", "px4", "ardupilot", "yaml"}) {
+    const auto r = run(format, {"--set", "kd=5.1e-8", "--set", "I_zz=0.05"});
+    EXPECT_EQ(r.exit_code, 0) << format << ": " << r.err;
+  }
+  EXPECT_NE(Slurp(dir + "/out.yaml").find("# value: B.I_zz = 0.05: given by the user"), std::string::npos);
+}
+
+// Real flights (skipped without ../shared/data/real): a Crazyflie identify report discards kd (refused
+// by name; with a thrust-stand kd every format is written, the X layout in SIH's and ArduPilot's motor
+// order); the TU Delft throw fails its relative-error check (refused until --force).
+TEST(CliExportTest, RealCrazyflieAndTuDelftFlights) {
+  const auto cf = testing::SharedDataPath("real/crazyflie-imrc-rpm/brushed/raw/jana01");
+  const auto td = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  if (!cf || !td) GTEST_SKIP() << "no real flights under ../shared/data/real";
+  const std::string dir = MakeTempDir("rotorid-export-real");
+  const std::string cf_vehicle = testing::SourceDir() + "/data/vehicles/crazyflie21_brushed.yaml";
+  const std::string td_vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
+  ASSERT_EQ(RunRotorid({"identify", "--vehicle", cf_vehicle, "--log", *cf, "--allow-partial", "--json",
+                        dir + "/cf.json", "-q"})
                 .exit_code,
-            2);
+            0);
+  const auto no_kd = RunRotorid({"export", "--params", dir + "/cf.json", "--vehicle", cf_vehicle, "--format", "px4-sih",
+                                 "--out", dir + "/cf.sih"});
+  EXPECT_EQ(no_kd.exit_code, 1);
+  EXPECT_NE(no_kd.err.find("does not fix kd"), std::string::npos) << no_kd.err;
+  for (const char* format : {"gz", "gazebo-classic", "px4", "px4-sih", "ardupilot", "yaml"}) {
+    const auto r = RunRotorid({"export", "--params", dir + "/cf.json", "--vehicle", cf_vehicle, "--format", format,
+                               "--out", dir + "/cf." + format, "--set", "kd=1.2e-10", "-q"});
+    EXPECT_EQ(r.exit_code, 0) << format << ": " << r.err;
+  }
+  EXPECT_NE(Slurp(dir + "/cf.px4-sih").find("SIH motor 1 = rotor 3, SIH motor 2 = rotor 4, SIH motor 3 = rotor 2"),
+            std::string::npos);
+
+  const auto id = RunRotorid({"identify", "--vehicle", td_vehicle, "--log", *td, "--cutoff-hz", "30",
+                              "--all-parameters", "--allow-partial", "--json", dir + "/td.json", "-q"});
+  ASSERT_TRUE(id.exit_code == 0 || id.exit_code == 3) << id.err;
+  const bool failed = id.exit_code == 3;
+  const std::vector<std::string> args = {"export",   "--params", dir + "/td.json", "--vehicle",
+                                         td_vehicle, "--format", "px4-sih",        "--max-rotor-speed",
+                                         "5000",     "--out",    dir + "/td.sih"};
+  EXPECT_EQ(RunRotorid(args).exit_code, failed ? 1 : 0);
+  std::vector<std::string> forced = args;
+  forced.push_back("--force");
+  EXPECT_EQ(RunRotorid(forced).exit_code, 0);
+  EXPECT_EQ(Slurp(dir + "/td.sih").find("FAILED CHECK") != std::string::npos, failed);
+}
+
+TEST(CliExportTest, HelpListsEveryFormatAsAChoice) {
+  const auto help = RunRotorid({"export", "--help"});
+  ASSERT_EQ(help.exit_code, 0);
+  const size_t open = help.out.find("{gz,"), close = help.out.find('}', open);
+  ASSERT_NE(open, std::string::npos) << help.out;
+  const std::string choices = help.out.substr(open, close - open + 1);
+  for (const char* format : {"gz", "gazebo-classic", "px4", "px4-sih", "ardupilot", "yaml"})
+    EXPECT_NE(choices.find(std::string(format) + ","), std::string::npos) << choices;
 }
 
 TEST(CliVehicleTest, FromPx4CrazyflieAndColumnMap) {
@@ -188,7 +289,8 @@ TEST(CliVehicleTest, FromBlackboxHeaderWithTheArmLength) {
   const auto no_arm = RunRotorid({"vehicle", "--log", *log, "--mass", "0.6", "--out", dir + "/q.yaml"});
   EXPECT_EQ(no_arm.exit_code, 1);
   EXPECT_NE(no_arm.err.find("arm"), std::string::npos) << no_arm.err;
-  const auto r = RunRotorid({"vehicle", "--log", *log, "--mass", "0.6", "--arm-length", "0.1", "--out", dir + "/q.yaml"});
+  const auto r =
+      RunRotorid({"vehicle", "--log", *log, "--mass", "0.6", "--arm-length", "0.1", "--out", dir + "/q.yaml"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Vehicle v = ReadVehicleYaml(dir + "/q.yaml");
   ASSERT_EQ(v.num_rotors(), 4);
