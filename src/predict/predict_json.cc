@@ -1,0 +1,93 @@
+#include <string>
+
+#include "rotorid/predict/predict.h"
+#include "rotorid/report/checks_json.h"
+#include "rotorid/report/input_json.h"
+#include "rotorid/report/json.h"
+
+namespace rotorid {
+namespace {
+
+// {group: [MAE(1), ..., MAE(N)]} for the verified groups.
+nlohmann::json CurvesJson(const std::array<std::vector<double>, kNumPredictionGroups>& curves) {
+  nlohmann::json out = nlohmann::json::object();
+  for (int g = 0; g < kNumPredictionGroups; ++g) {
+    if (curves[g].empty()) continue;
+    nlohmann::json values = nlohmann::json::array();
+    for (double v : curves[g]) values.push_back(JsonNumber(v));
+    out[kPredictionGroupNames[g]] = values;
+  }
+  return out;
+}
+
+// {group: {"1": MAE(1), "10": MAE(10), "N": MAE(N)}}; with `naive`, the ratio model / naive instead.
+nlohmann::json AtSummarySteps(const PredictionCurves& curves, const std::vector<int>& steps, bool ratio) {
+  nlohmann::json out = nlohmann::json::object();
+  for (int g = 0; g < kNumPredictionGroups; ++g) {
+    if (curves.mae[g].empty()) continue;
+    nlohmann::json at = nlohmann::json::object();
+    for (int h : steps) {
+      const double mae = curves.mae[g][h - 1];
+      at[std::to_string(h)] = JsonNumber(ratio ? mae / curves.naive_mae[g][h - 1] : mae);
+    }
+    out[kPredictionGroupNames[g]] = at;
+  }
+  return out;
+}
+
+nlohmann::json FlightsJson(const PredictResult& result, const std::vector<int>& steps) {
+  nlohmann::json flights = nlohmann::json::array();
+  for (const FlightPrediction& f : result.flights) {
+    nlohmann::json naive = nlohmann::json::object();
+    PredictionCurves naive_only = f.curves;
+    naive_only.mae = f.curves.naive_mae;
+    flights.push_back({{"file", f.file},
+                       {"windows", f.curves.windows},
+                       {"states", f.states},
+                       {"mae", AtSummarySteps(f.curves, steps, false)},
+                       {"naive_mae", AtSummarySteps(naive_only, steps, false)},
+                       {"ratio_to_naive", AtSummarySteps(f.curves, steps, true)}});
+  }
+  return flights;
+}
+
+std::string GroundRule(const PredictOptions& o) {
+  if (o.scope == PredictionScope::kWhole) return "every window inside the flight";
+  return "every sample of the window airborne: O_d at least " + std::to_string(o.ground_clearance_m) +
+         " m above the lowest logged height (or the log's ground_z); without a pose, rotor thrust at least " +
+         std::to_string(o.airborne_thrust_share) + " of the weight";
+}
+
+}  // namespace
+
+nlohmann::json PredictJson(const PredictResult& result) {
+  const PredictOptions& o = result.options;
+  const std::vector<int> steps = PredictionSummarySteps(o.horizon_steps);
+  const nlohmann::json settings = {{"horizon_steps", o.horizon_steps},
+                                   {"stride", o.stride},
+                                   {"dt_s", o.dt_s},
+                                   {"scope", PredictionScopeName(o.scope)},
+                                   {"segment", o.segment == SegmentMode::kAuto ? "auto" : "none"},
+                                   {"rotor_signal", o.source.rotor_signal}};
+  nlohmann::json prediction = {{"horizon_steps", o.horizon_steps},
+                               {"dt_s", o.dt_s},
+                               {"scope", PredictionScopeName(o.scope)},
+                               {"scope_rule", GroundRule(o)},
+                               {"stride", o.stride},
+                               {"block", result.block},
+                               {"windows", result.pooled.windows},
+                               {"mae", CurvesJson(result.pooled.mae)},
+                               {"naive_mae", CurvesJson(result.pooled.naive_mae)},
+                               {"ratio_to_naive", AtSummarySteps(result.pooled, steps, true)},
+                               {"flights", FlightsJson(result, steps)}};
+  return {{"rotorid_version", kRotoridVersion},
+          {"command", "predict"},
+          {"params", o.params_path},
+          {"block", result.block},
+          {"settings", settings},
+          {"prediction", prediction},
+          {"input", InputJson(result.inputs)},
+          {"checks", ChecksJson(result.checks)}};
+}
+
+}  // namespace rotorid
