@@ -12,7 +12,7 @@ namespace rotorid::cli {
 Command AddPredictCommand(CLI::App& root) {
   struct Options {
     PredictOptions predict;
-    std::vector<std::string> windows;
+    std::vector<std::string> windows, overrides;
     std::string segment = "auto", scope = "airborne", json_path;
     bool quiet = false;
   };
@@ -38,6 +38,8 @@ Command AddPredictCommand(CLI::App& root) {
   app->add_option("--scope", o->scope, "airborne or whole")->check(CLI::IsMember({"airborne", "whole"}));
   app->add_option("--block", p.block, "linear or refined (default: refined when present)")
       ->check(CLI::IsMember({"linear", "refined"}));
+  app->add_option("--set", o->overrides, "NAME=VALUE: fly with this report parameter replaced (repeatable)")
+      ->check(ParsesWith(ParseParameterOverride));
   app->add_option("--threads", p.threads, "threads (0: every core)")->capture_default_str();
   app->add_option("--json", o->json_path, "write the machine-readable report to this file");
   app->add_flag("--quiet,-q", o->quiet, "print nothing but errors");
@@ -45,6 +47,7 @@ Command AddPredictCommand(CLI::App& root) {
     o->predict.scope = ParsePredictionScope(o->scope);
     o->predict.segment = ParseSegmentMode(o->segment);
     for (const std::string& w : o->windows) o->predict.windows.push_back(ParseTimeWindow(w));
+    for (const std::string& text : o->overrides) o->predict.parameter_overrides.insert(ParseParameterOverride(text));
     if (const std::string problem = o->predict.Validate(); !problem.empty()) throw UsageError(problem);
     MarkOptionsValidated();
     const PredictResult result = RunPredict(o->predict);

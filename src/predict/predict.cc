@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <stdexcept>
 
 #include "predict/rollout.h"
 #include "rotorid/core/error.h"
@@ -23,6 +24,20 @@ PredictionScope ParsePredictionScope(const std::string& text) {
 
 const char* PredictionScopeName(PredictionScope scope) {
   return scope == PredictionScope::kAirborne ? "airborne" : "whole";
+}
+
+std::pair<std::string, double> ParseParameterOverride(const std::string& text) {
+  const size_t equals = text.find('=');
+  const std::string why = "--set takes NAME=VALUE (a report parameter and a number), got '" + text + "'";
+  if (equals == std::string::npos || equals == 0) throw Error(why);
+  try {
+    size_t used = 0;
+    const double value = std::stod(text.substr(equals + 1), &used);
+    if (used != text.size() - equals - 1 || !std::isfinite(value)) throw Error(why);
+    return {text.substr(0, equals), value};
+  } catch (const std::logic_error&) {
+    throw Error(why);
+  }
 }
 
 std::string PredictOptions::Validate() const {
@@ -54,14 +69,22 @@ std::vector<int> PredictionSummarySteps(int horizon_steps) {
 namespace {
 
 // The model of `vehicle`'s configuration in the report: the values it predicts with (a discarded
-// inertia's profiled estimate, INTERFACE.md 5's predicts_with), the refined block's effects.
+// inertia's profiled estimate, INTERFACE.md 5's predicts_with) unless `overrides` replaces them, the
+// refined block's effects.
 internal::FlownModel FlownModelFromReport(const nlohmann::json& report, const std::string& source,
-                                          const Vehicle& vehicle, const std::string& block) {
+                                          const Vehicle& vehicle, const std::string& block,
+                                          const std::map<std::string, double>& overrides) {
   IdentifiedModel identified = IdentifiedModelFromReport(report, source, vehicle, block);
   for (const auto& [name, value] : ParameterValuesFromReport(report, source, identified.block, /*predicted=*/true))
     if (identified.parameters.count(name)) identified.parameters[name].value = value;
+  for (const auto& [name, value] : overrides) {
+    if (!identified.parameters.count(name))
+      throw Error(source + ": no parameter '" + name + "' in its " + identified.block + " block to replace");
+    identified.parameters[name].value = value;
+  }
   const std::string c = vehicle.name + ".";
   internal::FlownModel model;
+  model.source = source;
   model.parameters.mass_kg = vehicle.mass_kg;
   model.parameters.rotor = {identified.Value("kt"), identified.Value("kd")};
   Eigen::VectorXd chi(kNumBodyParameters);
@@ -87,6 +110,21 @@ Check PhysicalConsistencyCheck(const Vehicle& vehicle, const VehicleParameters& 
   return check;
 }
 
+// `rotorid simulate --truth` JSON (plain numbers under "parameters" and "effects") read as a refine
+// report whose refined block holds the simulator's true parameters and effects: the model flown is
+// then the simulator's own. Any other JSON is returned as it is.
+nlohmann::json ReportOrTruth(nlohmann::json report) {
+  if (report.contains("linear") || report.contains("refined") || !report.contains("parameters") ||
+      !report.contains("effects") || !report["parameters"].is_object())
+    return report;
+  nlohmann::json refined = {{"parameters", nlohmann::json::object()}, {"effects", nlohmann::json::object()}};
+  for (const auto& [name, value] : report["parameters"].items())
+    refined["parameters"][name] = {{"value", value}, {"std", 0.0}, {"essential", true}};
+  for (const auto& [name, value] : report["effects"].items())
+    refined["effects"][name] = {{"value", value}, {"enabled", true}};
+  return {{"refined", refined}};
+}
+
 // The log read whole, its lowest height kept as the ground for the airborne rule, then cut to its
 // window and segmented as every command does.
 SelectedFlight ReadFlight(const PredictOptions& options, size_t i, const Vehicle& vehicle) {
@@ -103,7 +141,7 @@ PredictResult RunPredict(const PredictOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   PredictResult result;
   result.options = options;
-  const nlohmann::json report = ReadJsonFile(options.params_path);
+  const nlohmann::json report = ReportOrTruth(ReadJsonFile(options.params_path));
   const ObservationOptions observation = ObservationOptionsFromJson(
       report.contains("settings") && report["settings"].contains("observation") ? report["settings"]["observation"]
                                                                                 : nlohmann::json());
@@ -111,7 +149,8 @@ PredictResult RunPredict(const PredictOptions& options) {
   std::set<std::string> checked_configs;
   for (size_t i = 0; i < options.log_paths.size(); ++i) {
     const Vehicle vehicle = ReadVehicleYaml(options.vehicle_paths[i]);
-    const internal::FlownModel model = FlownModelFromReport(report, options.params_path, vehicle, options.block);
+    const internal::FlownModel model =
+        FlownModelFromReport(report, options.params_path, vehicle, options.block, options.parameter_overrides);
     result.block = IdentifiedModelFromReport(report, options.params_path, vehicle, options.block).block;
     if (checked_configs.insert(vehicle.name).second)
       result.checks.push_back(PhysicalConsistencyCheck(vehicle, model.parameters));

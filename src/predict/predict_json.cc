@@ -63,12 +63,13 @@ std::string GroundRule(const PredictOptions& o) {
 nlohmann::json PredictJson(const PredictResult& result) {
   const PredictOptions& o = result.options;
   const std::vector<int> steps = PredictionSummarySteps(o.horizon_steps);
-  const nlohmann::json settings = {{"horizon_steps", o.horizon_steps},
-                                   {"stride", o.stride},
-                                   {"dt_s", o.dt_s},
-                                   {"scope", PredictionScopeName(o.scope)},
-                                   {"segment", o.segment == SegmentMode::kAuto ? "auto" : "none"},
-                                   {"rotor_signal", o.source.rotor_signal}};
+  nlohmann::json settings = {{"horizon_steps", o.horizon_steps},
+                             {"stride", o.stride},
+                             {"dt_s", o.dt_s},
+                             {"scope", PredictionScopeName(o.scope)},
+                             {"segment", o.segment == SegmentMode::kAuto ? "auto" : "none"},
+                             {"rotor_signal", o.source.rotor_signal},
+                             {"parameter_overrides", o.parameter_overrides}};
   nlohmann::json prediction = {{"horizon_steps", o.horizon_steps},
                                {"dt_s", o.dt_s},
                                {"scope", PredictionScopeName(o.scope)},

@@ -6,6 +6,7 @@
 
 #include "core/parallel_for.h"
 #include "rotorid/core/error.h"
+#include "rotorid/model/physical_consistency.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/refine/effect_model.h"
 #include "rotorid/signal/butterworth.h"
@@ -193,8 +194,16 @@ ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const 
   const int horizon = options.horizon_steps;
   // The rotor-wrench effects act in the physics; the rotor-signal ones (a motor lag among them) are
   // already in the acting rotor speeds, so the dynamics carry no lag state of their own.
-  const MultirotorDynamics dynamics(vehicle, model.parameters, states.gravity_mps2, /*motor_time_constant_s=*/0.0,
-                                    ActingEffects(model.effects, EffectStage::kRotorWrench));
+  const MultirotorDynamics dynamics = [&] {
+    try {
+      return MultirotorDynamics(vehicle, model.parameters, states.gravity_mps2, /*motor_time_constant_s=*/0.0,
+                                ActingEffects(model.effects, EffectStage::kRotorWrench));
+    } catch (const Error& e) {
+      throw Error(model.source + ": configuration '" + vehicle.name + "' cannot be flown: " +
+                  CheckPhysicalConsistency(model.parameters.mass_kg, model.parameters.body).problem + " (" + e.what() +
+                  ")");
+    }
+  }();
   // Start instants whose whole window k..k+N is in the scope (no grounded sample in it).
   std::vector<int> grounded_before(states.size() + 1, 0);
   for (int k = 0; k < states.size(); ++k) grounded_before[k + 1] = grounded_before[k] + (states.airborne[k] ? 0 : 1);

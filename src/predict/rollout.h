@@ -18,6 +18,7 @@ namespace rotorid::internal {
 
 // The model a report describes for one configuration: what the simulator's physics takes.
 struct FlownModel {
+  std::string source;  // the report's file, for messages
   VehicleParameters parameters;
   Effects effects;
 };

@@ -17,9 +17,11 @@
 // lag, battery, command map), so the prediction flies exactly the model the report identified.
 
 #include <array>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rotorid/ident/checks.h"
@@ -40,6 +42,8 @@ enum class PredictionScope { kAirborne, kWhole };
 // "airborne" or "whole"; throws rotorid::Error otherwise.
 PredictionScope ParsePredictionScope(const std::string& text);
 const char* PredictionScopeName(PredictionScope scope);
+// "NAME=VALUE" (a report parameter and a finite number); throws rotorid::Error otherwise.
+std::pair<std::string, double> ParseParameterOverride(const std::string& text);
 
 struct PredictOptions {
   // The identify or refine report whose model is flown.
@@ -52,6 +56,9 @@ struct PredictOptions {
   std::vector<std::optional<TimeWindow>> windows;  // empty, or one per log
   SegmentMode segment = SegmentMode::kAuto;
   FlightSourceOptions source;
+  // Parameters replaced by outside values (a thrust stand's kd, a CAD inertia), by report name
+  // ("kd", "<config>.I_zz"): for what a flight cannot fix. Written into the report.
+  std::map<std::string, double> parameter_overrides;
   // Steps ahead N, start stride K, prediction grid (s).
   int horizon_steps = 50;
   int stride = 1;
