@@ -53,9 +53,9 @@ nlohmann::json FlightsJson(const PredictResult& result, const std::vector<int>& 
 
 std::string GroundRule(const PredictOptions& o) {
   if (o.scope == PredictionScope::kWhole) return "every window inside the flight";
-  return "every sample of the window airborne: O_d at least " + std::to_string(o.ground_clearance_m) +
-         " m above the lowest logged height (or the log's ground_z); without a pose, rotor thrust at least " +
-         std::to_string(o.airborne_thrust_share) + " of the weight";
+  return "every sample of the window airborne: rotor thrust kt sum Omega^2 at least " +
+         std::to_string(o.airborne_thrust_share) + " of the weight, or O_d at least " +
+         std::to_string(o.ground_clearance_m) + " m above the lowest logged height (or the log's ground_z)";
 }
 
 }  // namespace

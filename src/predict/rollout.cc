@@ -75,15 +75,16 @@ void ReadPose(const FlightLog& log, const ObservationOptions& observation, const
   const auto ground = log.metadata.find("ground_z");
   const double ground_z =
       ground != log.metadata.end() ? std::stod(ground->second) : mocap.position_w_m.col(2).minCoeff();
+  // A log may start and end in the air (its lowest height is then a hover's): near that height the
+  // rotors' thrust decides.
+  const std::vector<char> carried = states->airborne;
   for (int k = 0; k < states->size(); ++k)
-    states->airborne[k] = states->position_w_m(k, 2) - ground_z >= options.ground_clearance_m;
+    states->airborne[k] = carried[k] || states->position_w_m(k, 2) - ground_z >= options.ground_clearance_m;
 }
 
 // Without a pose: the attitude is the integrated gyro (the rotation error of a window needs only the
-// relative rotation, and the rotational dynamics do not depend on the attitude); airborne when the
-// rotors carry the given share of the weight.
-void IntegrateGyro(const Vehicle& vehicle, const FlownModel& model, const PredictOptions& options,
-                   LoggedStates* states) {
+// relative rotation, and the rotational dynamics do not depend on the attitude).
+void IntegrateGyro(LoggedStates* states) {
   states->position_w_m = Eigen::MatrixX3d::Zero(states->size(), 3);
   states->velocity_w_mps = Eigen::MatrixX3d::Zero(states->size(), 3);
   states->attitude_wb.assign(states->size(), Eigen::Quaterniond::Identity());
@@ -93,10 +94,6 @@ void IntegrateGyro(const Vehicle& vehicle, const FlownModel& model, const Predic
     states->attitude_wb[k] =
         (states->attitude_wb[k - 1] * RotationVectorToQuaternion(mean_rate * states->dt_s)).normalized();
   }
-  const double weight_n = vehicle.mass_kg * states->gravity_mps2;
-  for (int k = 0; k < states->size(); ++k)
-    states->airborne[k] = model.parameters.rotor.kt * states->rotor_speed_radps.row(k).squaredNorm() >=
-                          options.airborne_thrust_share * weight_n;
   states->description = "no pose in the log: attitude integrated from the gyro (rotation and angular velocity only)";
 }
 
@@ -116,11 +113,17 @@ LoggedStates ReadLoggedStates(const FlightLog& log, const Vehicle& vehicle, cons
   states.rotor_speed_radps =
       InterpolateLinear(processed.t_s, RotorSignalWithEffects(processed, model.effects), states.t_s);
   states.angular_velocity_b_radps = CorrectedGyro(log, model.effects, states.t_s);
-  states.airborne.assign(states.t_s.size(), 1);
+  // Airborne when the rotors carry the given share of the weight; with a pose, also when well above
+  // the ground.
+  const double weight_n = vehicle.mass_kg * states.gravity_mps2;
+  states.airborne.resize(states.t_s.size());
+  for (int k = 0; k < states.size(); ++k)
+    states.airborne[k] = model.parameters.rotor.kt * states.rotor_speed_radps.row(k).squaredNorm() >=
+                         options.airborne_thrust_share * weight_n;
   if (log.mocap)
     ReadPose(log, observation, options, &states);
   else
-    IntegrateGyro(vehicle, model, options, &states);
+    IntegrateGyro(&states);
   if (options.scope == PredictionScope::kWhole) std::fill(states.airborne.begin(), states.airborne.end(), 1);
   return states;
 }

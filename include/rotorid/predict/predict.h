@@ -64,9 +64,9 @@ struct PredictOptions {
   int stride = 1;
   double dt_s = 0.01;
   PredictionScope scope = PredictionScope::kAirborne;
-  // Ground-contact rule of the airborne scope. With a pose: O_d at least this high above the lowest
-  // logged height of the whole log (or its `# ground_z:`). Without one: the rotors' thrust
-  // kt sum Omega_i^2 at least this share of the weight.
+  // Ground-contact rule of the airborne scope: a sample is airborne when the rotors' thrust
+  // kt sum Omega_i^2 carries at least this share of the weight, or, with a pose, when O_d is at least
+  // this high above the lowest logged height of the whole log (or its `# ground_z:`).
   double ground_clearance_m = 0.05;
   double airborne_thrust_share = 0.5;
   // Threads over start instants (0: the machine's cores).
