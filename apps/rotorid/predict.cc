@@ -13,7 +13,7 @@ Command AddPredictCommand(CLI::App& root) {
   struct Options {
     PredictOptions predict;
     std::vector<std::string> windows, overrides;
-    std::string segment = "auto", scope = "airborne", json_path;
+    std::string segment = "auto", scope = "airborne", json_path, report_dir;
     bool quiet = false;
   };
   auto o = std::make_shared<Options>();
@@ -42,6 +42,7 @@ Command AddPredictCommand(CLI::App& root) {
       ->check(ParsesWith(ParseParameterOverride));
   app->add_option("--threads", p.threads, "threads (0: every core)")->capture_default_str();
   app->add_option("--json", o->json_path, "write the machine-readable report to this file");
+  app->add_option("--report", o->report_dir, "write predict.html (MAE against h, tables) into this folder");
   app->add_flag("--quiet,-q", o->quiet, "print nothing but errors");
   command.run = [o]() {
     o->predict.scope = ParsePredictionScope(o->scope);
@@ -52,6 +53,7 @@ Command AddPredictCommand(CLI::App& root) {
     MarkOptionsValidated();
     const PredictResult result = RunPredict(o->predict);
     if (!o->json_path.empty()) WriteJsonFile(o->json_path, PredictJson(result));
+    const std::string report = o->report_dir.empty() ? "" : WritePredictReport(o->report_dir, result);
     if (!o->quiet) {
       for (const FlightInputSummary& input : result.inputs) std::cout << input.ConsoleLine() << "\n";
       std::cout << "rotorid predict: " << result.block << " model of " << o->predict.params_path << ", "
@@ -68,6 +70,7 @@ Command AddPredictCommand(CLI::App& root) {
                     << result.pooled.naive_mae[g][h - 1];
         std::cout << "\n";
       }
+      if (!report.empty()) std::cout << "report: " << report << "\n";
     }
     return PrintChecks(result.checks, o->quiet);
   };

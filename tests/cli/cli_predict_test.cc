@@ -57,9 +57,16 @@ std::string* CliPredictTest::dir_ = nullptr;
 
 TEST_F(CliPredictTest, WritesTheContractKeys) {
   int code = -1;
-  const nlohmann::json r =
-      Predict({"--params", *dir_ + "/identify.json", "--log", *dir_ + "/pose.csv", "--horizon", "20"}, &code);
+  const nlohmann::json r = Predict({"--params", *dir_ + "/identify.json", "--log", *dir_ + "/pose.csv", "--horizon",
+                                    "20", "--report", *dir_ + "/html"},
+                                   &code);
   EXPECT_TRUE(code == 0 || code == 3);
+  // The HTML report: one MAE-against-h figure per group, the model's curve and naive's in each.
+  const std::string html = Slurp(*dir_ + "/html/predict.html");
+  size_t figures = 0;
+  for (size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) ++figures;
+  EXPECT_EQ(figures, 4u);
+  EXPECT_NE(html.find("angular_velocity (rad/s)"), std::string::npos);
   const nlohmann::json& p = r.at("prediction");
   EXPECT_EQ(p.at("horizon_steps"), 20);
   EXPECT_DOUBLE_EQ(p.at("dt_s").get<double>(), 0.01);

@@ -106,6 +106,12 @@ PredictResult RunPredict(const PredictOptions& options);
 // naive_mae, flights[]}, input, checks. docs/report_format.md lists the keys.
 nlohmann::json PredictJson(const PredictResult& result);
 
+// The HTML report: MAE(h) per group beside the naive curve (inline SVG), the table at h = 1, 10, N,
+// per-flight tables and the checks; WritePredictReport writes it as DIR/predict.html and returns
+// that path.
+std::string PredictHtml(const PredictResult& result);
+std::string WritePredictReport(const std::string& dir, const PredictResult& result);
+
 // The steps at which flights[] and the console give the MAE: 1, 10, N (those <= N, no repeats).
 std::vector<int> PredictionSummarySteps(int horizon_steps);
 
