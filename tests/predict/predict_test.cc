@@ -30,9 +30,11 @@ struct SimulatedFiles {
   std::string log, vehicle, truth;
 };
 SimulatedFiles SimulateToFiles(const std::string& dir, const std::string& noise, std::uint64_t seed,
-                               const Effects& effects = {}) {
+                               const Effects& effects = {}, FlightProfile profile = FlightProfile::kPaper,
+                               double debug_seconds = 4.0) {
   const SimulationVehicle a = PresetVehicle("A");
-  SimulationOptions options = testing::TestOptions(15.0, 4.0);
+  SimulationOptions options = testing::TestOptions(15.0, debug_seconds);
+  options.profile = profile;
   options.log_rate_hz = 100.0;
   options.noise = NoiseLevels::Preset(noise);
   options.mocap = true;
@@ -144,6 +146,40 @@ TEST(PredictTest, RefusesAReportWhoseBodyCannotBeIntegrated) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cannot be flown"), std::string::npos) << e.what();
   }
+}
+
+TEST(PredictTest, AnInconsistentBodyIsFlownWithAnErrorCheck) {
+  const std::string dir = testing::MakeTempDir("predict-inconsistent");
+  const SimulatedFiles flight = SimulateToFiles(dir, "none", 6);
+  PredictOptions options = Options(flight.truth, flight);
+  // I_zz above I_xx + I_yy: the triangle inequality fails, yet the spatial inertia can be integrated.
+  const Eigen::Matrix3d inertia = PresetVehicle("A").parameters.body.inertia;
+  options.parameter_overrides["A.I_zz"] = 1.3 * (inertia(0, 0) + inertia(1, 1));
+  const PredictResult r = RunPredict(options);
+  ASSERT_EQ(r.checks.size(), 1u);
+  EXPECT_EQ(r.checks[0].name, "physical_consistency");
+  EXPECT_EQ(r.checks[0].status, CheckStatus::kError) << r.checks[0].message;
+  EXPECT_GT(r.pooled.windows, 0);
+}
+
+TEST(PredictTest, TheAirborneScopeLeavesOutGroundContact) {
+  const std::string dir = testing::MakeTempDir("predict-ground");
+  // Low hovers near the ground, climbs to 0.5 m and descents (the first climb at 4.9 s); the whole log.
+  const SimulatedFiles flight = SimulateToFiles(dir, "none", 7, {}, FlightProfile::kTakeoffLanding, 8.0);
+  PredictOptions options = Options(flight.truth, flight);
+  options.segment = SegmentMode::kNone;
+  options.scope = PredictionScope::kWhole;
+  const PredictResult whole = RunPredict(options);
+  options.scope = PredictionScope::kAirborne;
+  // The profile's low hovers are 0.13-0.2 m up: with 0.2 m of clearance and the height alone deciding,
+  // they count as ground contact.
+  options.ground_clearance_m = 0.2;
+  options.airborne_thrust_share = 2.0;
+  const PredictResult high = RunPredict(options);
+  EXPECT_LT(high.pooled.windows, whole.pooled.windows);
+  options.airborne_thrust_share = 0.5;  // the default: a vehicle carried by its rotors is in the air
+  const PredictResult carried = RunPredict(options);
+  EXPECT_EQ(carried.pooled.windows, whole.pooled.windows);
 }
 
 TEST(PredictTest, OptionsAndOverridesAreValidated) {
