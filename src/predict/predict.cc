@@ -85,6 +85,7 @@ internal::FlownModel FlownModelFromReport(const nlohmann::json& report, const st
   const std::string c = vehicle.name + ".";
   internal::FlownModel model;
   model.source = source;
+  model.block = identified.block;
   model.parameters.mass_kg = vehicle.mass_kg;
   model.parameters.rotor = {identified.Value("kt"), identified.Value("kd")};
   Eigen::VectorXd chi(kNumBodyParameters);
@@ -151,7 +152,7 @@ PredictResult RunPredict(const PredictOptions& options) {
     const Vehicle vehicle = ReadVehicleYaml(options.vehicle_paths[i]);
     const internal::FlownModel model =
         FlownModelFromReport(report, options.params_path, vehicle, options.block, options.parameter_overrides);
-    result.block = IdentifiedModelFromReport(report, options.params_path, vehicle, options.block).block;
+    result.block = model.block;
     if (checked_configs.insert(vehicle.name).second)
       result.checks.push_back(PhysicalConsistencyCheck(vehicle, model.parameters));
     SelectedFlight selected = ReadFlight(options, i, vehicle);

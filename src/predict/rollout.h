@@ -19,6 +19,7 @@ namespace rotorid::internal {
 // The model a report describes for one configuration: what the simulator's physics takes.
 struct FlownModel {
   std::string source;  // the report's file, for messages
+  std::string block;   // the report block it came from
   VehicleParameters parameters;
   Effects effects;
 };
