@@ -82,16 +82,12 @@ internal::FlownModel FlownModelFromReport(const nlohmann::json& report, const st
       throw Error(source + ": no parameter '" + name + "' in its " + identified.block + " block to replace");
     identified.parameters[name].value = value;
   }
-  const std::string c = vehicle.name + ".";
-  internal::FlownModel model;
+  std::map<std::string, double> values;
+  for (const auto& [name, entry] : identified.parameters) values[name] = entry.value;
+  internal::FlownModel model = internal::FlownModelFromValues(
+      values, identified.block == "refined" ? EffectsFromReport(report) : Effects(), vehicle);
   model.source = source;
   model.block = identified.block;
-  model.parameters.mass_kg = vehicle.mass_kg;
-  model.parameters.rotor = {identified.Value("kt"), identified.Value("kd")};
-  Eigen::VectorXd chi(kNumBodyParameters);
-  for (int k = 0; k < kNumBodyParameters; ++k) chi[k] = identified.Value(c + kBodyParameterNames[k]);
-  model.parameters.body = BodyParameters::FromVector(chi);
-  if (identified.block == "refined") model.effects = EffectsFromReport(report);
   return model;
 }
 
@@ -138,6 +134,37 @@ SelectedFlight ReadFlight(const PredictOptions& options, size_t i, const Vehicle
 
 }  // namespace
 
+namespace internal {
+
+FlownModel FlownModelFromValues(const std::map<std::string, double>& values, const Effects& effects,
+                                const Vehicle& vehicle) {
+  const auto value = [&values](const std::string& name) {
+    const auto it = values.find(name);
+    return it == values.end() ? 0.0 : it->second;
+  };
+  FlownModel model;
+  model.parameters.mass_kg = vehicle.mass_kg;
+  model.parameters.rotor = {value("kt"), value("kd")};
+  Eigen::VectorXd chi(kNumBodyParameters);
+  for (int k = 0; k < kNumBodyParameters; ++k) chi[k] = value(vehicle.name + "." + kBodyParameterNames[k]);
+  model.parameters.body = BodyParameters::FromVector(chi);
+  model.effects = effects;
+  return model;
+}
+
+ErrorSums ScoreSegments(const std::vector<FlightLog>& segments, const Vehicle& vehicle, const FlownModel& model,
+                        const ObservationOptions& observation, const PredictOptions& options, std::string* states) {
+  ErrorSums sums(options.horizon_steps, false);
+  for (const FlightLog& segment : segments) {
+    const LoggedStates logged = ReadLoggedStates(segment, vehicle, model, observation, options);
+    sums.Add(ScoreFlight(logged, vehicle, model, options));
+    if (states) *states = logged.description;
+  }
+  return sums;
+}
+
+}  // namespace internal
+
 PredictResult RunPredict(const PredictOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   PredictResult result;
@@ -158,12 +185,8 @@ PredictResult RunPredict(const PredictOptions& options) {
     SelectedFlight selected = ReadFlight(options, i, vehicle);
     FlightPrediction flight;
     flight.file = options.log_paths[i];
-    internal::ErrorSums sums(options.horizon_steps, false);
-    for (const FlightLog& segment : selected.segments) {
-      const internal::LoggedStates states = internal::ReadLoggedStates(segment, vehicle, model, observation, options);
-      sums.Add(internal::ScoreFlight(states, vehicle, model, options));
-      flight.states = states.description;
-    }
+    const internal::ErrorSums sums =
+        internal::ScoreSegments(selected.segments, vehicle, model, observation, options, &flight.states);
     flight.curves = sums.Mean();
     pooled.Add(sums);
     result.flights.push_back(std::move(flight));

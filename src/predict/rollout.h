@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,11 @@ struct FlownModel {
   VehicleParameters parameters;
   Effects effects;
 };
+
+// The model of `vehicle`'s configuration from named parameter values ("kt", "kd", "<config>.I_xx",
+// ...; a missing one is 0) and effects.
+FlownModel FlownModelFromValues(const std::map<std::string, double>& values, const Effects& effects,
+                                const Vehicle& vehicle);
 
 // One flight's states on the uniform prediction grid t_k = t_s[0] + k dt.
 struct LoggedStates {
@@ -61,5 +67,10 @@ struct ErrorSums {
 // the errors. Throws rotorid::Error when the model's body cannot be integrated.
 ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const FlownModel& model,
                       const PredictOptions& options);
+
+// ScoreFlight over the segments of a log; `states` (may be null) gets how the last one's states
+// were read.
+ErrorSums ScoreSegments(const std::vector<FlightLog>& segments, const Vehicle& vehicle, const FlownModel& model,
+                        const ObservationOptions& observation, const PredictOptions& options, std::string* states);
 
 }  // namespace rotorid::internal

@@ -1,6 +1,6 @@
 // rotorid predict (INTERFACE.md 6) against the simulator: the simulator's true model reproduces its
-// states to integration error, a wrong model does not, and an identified model's error stays at the
-// level of the noise instead of growing with the horizon.
+// states to integration error, a wrong model does not, an identified model's error stays at the
+// level of the noise instead of growing with the horizon, and a diagnosis step's effect shrinks it.
 
 #include "rotorid/predict/predict.h"
 
@@ -11,6 +11,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/io/vehicle_yaml.h"
+#include "rotorid/predict/diagnosis_prediction.h"
 #include "rotorid/report/json.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
@@ -60,7 +61,8 @@ PredictOptions Options(const std::string& params, const SimulatedFiles& flight) 
 }
 
 // MAE of the model at h steps ahead, and the naive predictor's.
-double Mae(const PredictResult& r, int group, int h) { return r.pooled.mae[group][h - 1]; }
+double Mae(const PredictionCurves& c, int group, int h) { return c.mae[group][h - 1]; }
+double Mae(const PredictResult& r, int group, int h) { return Mae(r.pooled, group, h); }
 double Naive(const PredictResult& r, int group, int h) { return r.pooled.naive_mae[group][h - 1]; }
 
 TEST(PredictTest, TrueModelReproducesTheSimulatorToIntegrationError) {
@@ -180,6 +182,36 @@ TEST(PredictTest, TheAirborneScopeLeavesOutGroundContact) {
   options.airborne_thrust_share = 0.5;  // the default: a vehicle carried by its rotors is in the air
   const PredictResult carried = RunPredict(options);
   EXPECT_EQ(carried.pooled.windows, whole.pooled.windows);
+}
+
+TEST(PredictTest, DiagnosisStepsArePredictedOnTheHeldOutFlights) {
+  // A 30 ms motor lag the linear model lacks: the step that adds it must shrink the prediction error.
+  const SimulationVehicle a = PresetVehicle("A");
+  SimulationOptions options = testing::TestOptions(15.0, 4.0);
+  options.log_rate_hz = 100.0;
+  options.mocap = true;
+  options.effects.Set("motor_tau_s", 0.03);
+  const SimulationResult training = Simulate(a.vehicle, a.parameters, options);
+  options.seed = 2;
+  const SimulationResult held_out = Simulate(a.vehicle, a.parameters, options);
+  Diagnosis diagnosis;
+  diagnosis.steps.push_back({ParseEffectKind("motor_lag"), {}, {}, {}});
+  IdentifyOptions identify;
+  identify.allow_partial = true;
+  PredictOptions settings;
+  settings.stride = 5;
+  const std::vector<StepPrediction> steps = PredictDiagnosisSteps(diagnosis, {{a.vehicle, training.log, 1.0}},
+                                                                  {{a.vehicle, held_out.log, 1.0}}, identify, settings);
+  ASSERT_EQ(steps.size(), 2u);
+  EXPECT_TRUE(steps[0].effects.empty());
+  ASSERT_EQ(steps[1].effects.size(), 1u);
+  EXPECT_LT(Mae(steps[1].curves, kAngularVelocity, 50), 0.3 * Mae(steps[0].curves, kAngularVelocity, 50));
+  nlohmann::json report = {{"steps", nlohmann::json::array({nlohmann::json::object()})}};
+  AddStepPredictions(steps, &report);
+  EXPECT_TRUE(report["baseline"]["prediction"]["mae"]["rotation"].contains("50"));
+  EXPECT_TRUE(report["steps"][0]["prediction"]["naive_mae"]["angular_velocity"].contains("10"));
+  // Without held-out flights there is nothing to predict.
+  EXPECT_TRUE(PredictDiagnosisSteps(diagnosis, {{a.vehicle, training.log, 1.0}}, {}, identify).empty());
 }
 
 TEST(PredictTest, OptionsAndOverridesAreValidated) {

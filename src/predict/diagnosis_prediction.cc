@@ -1,0 +1,76 @@
+#include "rotorid/predict/diagnosis_prediction.h"
+
+#include "predict/rollout.h"
+#include "rotorid/core/error.h"
+#include "rotorid/ident/tls.h"
+#include "rotorid/refine/refine.h"
+#include "rotorid/report/json.h"
+
+namespace rotorid {
+namespace {
+
+// The held-out flights flown with these parameters and effects, pooled.
+StepPrediction PredictHeldOut(const std::map<std::string, double>& values, const Effects& effects,
+                              const std::vector<FlightData>& held_out, const ObservationOptions& observation,
+                              const PredictOptions& settings) {
+  StepPrediction prediction;
+  internal::ErrorSums sums(settings.horizon_steps, false);
+  try {
+    for (const FlightData& flight : held_out) {
+      const internal::FlownModel model = internal::FlownModelFromValues(values, effects, flight.vehicle);
+      sums.Add(internal::ScoreSegments({flight.log}, flight.vehicle, model, observation, settings, nullptr));
+    }
+  } catch (const Error& e) {
+    prediction.unavailable = e.what();
+  }
+  prediction.curves = sums.Mean();
+  return prediction;
+}
+
+}  // namespace
+
+std::vector<StepPrediction> PredictDiagnosisSteps(const Diagnosis& diagnosis, const std::vector<FlightData>& training,
+                                                  const std::vector<FlightData>& held_out,
+                                                  const IdentifyOptions& identify, const PredictOptions& settings) {
+  if (held_out.empty() || training.empty()) return {};
+  const IdentificationResult linear = Identify(training, identify);
+  std::vector<StepPrediction> out;
+  out.push_back(PredictHeldOut(NamedParameters(linear.system, PredictionChi(linear.solution)), Effects(), held_out,
+                               identify.observation, settings));
+  RefineOptions refine;
+  refine.effects.clear();
+  for (const SelectionStep& step : diagnosis.steps) {
+    refine.effects.push_back(step.added);
+    const RefineResult refined = Refine(linear, refine);
+    out.push_back(PredictHeldOut(NamedParameters(linear.system, PredictionChi(refined.refined)), refined.effects,
+                                 held_out, identify.observation, settings));
+    out.back().effects = refine.effects;
+  }
+  return out;
+}
+
+void AddStepPredictions(const std::vector<StepPrediction>& predictions, nlohmann::json* report) {
+  for (size_t k = 0; k < predictions.size(); ++k) {
+    const StepPrediction& p = predictions[k];
+    nlohmann::json j = {{"windows", p.curves.windows}};
+    if (!p.unavailable.empty()) j["unavailable"] = p.unavailable;
+    for (const char* which : {"mae", "naive_mae"}) {
+      nlohmann::json groups = nlohmann::json::object();
+      for (int g = 0; g < kNumPredictionGroups; ++g) {
+        const std::vector<double>& curve = std::string(which) == "mae" ? p.curves.mae[g] : p.curves.naive_mae[g];
+        if (curve.empty()) continue;
+        nlohmann::json at = nlohmann::json::object();
+        for (int h : PredictionSummarySteps(static_cast<int>(curve.size())))
+          if (h > 1) at[std::to_string(h)] = JsonNumber(curve[h - 1]);
+        groups[kPredictionGroupNames[g]] = at;
+      }
+      j[which] = groups;
+    }
+    if (k == 0)
+      (*report)["baseline"]["prediction"] = j;
+    else if (report->contains("steps") && k - 1 < (*report)["steps"].size())
+      (*report)["steps"][k - 1]["prediction"] = j;
+  }
+}
+
+}  // namespace rotorid
