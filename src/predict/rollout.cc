@@ -9,7 +9,6 @@
 #include "rotorid/model/physical_consistency.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/refine/effect_model.h"
-#include "rotorid/signal/butterworth.h"
 #include "rotorid/signal/differentiate.h"
 #include "rotorid/signal/resample.h"
 #include "rotorid/sim/dynamics.h"
@@ -51,7 +50,7 @@ Eigen::MatrixX3d CorrectedGyro(const FlightLog& log, const Effects& effects, con
 }
 
 // Position, velocity and attitude from the motion capture; the ground-contact rule on the height.
-void ReadPose(const FlightLog& log, const ObservationOptions& observation, const PredictOptions& options,
+void ReadPose(const FlightLog& log, const ProcessedFlight& processed, const PredictOptions& options,
               LoggedStates* states) {
   const MocapTrack& mocap = *log.mocap;
   states->has_pose = true;
@@ -60,11 +59,12 @@ void ReadPose(const FlightLog& log, const ObservationOptions& observation, const
     states->velocity_w_mps = InterpolateLinear(log.t_s, *mocap.velocity_w_mps, states->t_s);
     states->description = "position, attitude from motion capture, velocity from the log's velocity columns";
   } else {
-    // The position low-passed as the identification does before differentiating it.
-    const SosFilter filter = DesignButterworth(observation.filter, 1.0 / states->dt_s);
-    states->velocity_w_mps = FourthOrderCentralDifference(FiltFiltColumns(filter, states->position_w_m), states->dt_s);
-    states->description = "position, attitude from motion capture, velocity its differentiated position (" +
-                          std::to_string(observation.filter.cutoff_hz) + " Hz low-pass)";
+    // The position low-passed as the identification does before differentiating it, at the log's rate.
+    const Eigen::MatrixXd position = InterpolateLinear(log.t_s, mocap.position_w_m, processed.t_s);
+    states->velocity_w_mps = InterpolateLinear(
+        processed.t_s, FourthOrderCentralDifference(FiltFiltColumns(processed.filter, position), processed.dt_s),
+        states->t_s);
+    states->description = "position, attitude from motion capture, velocity its low-passed, differentiated position";
   }
   Eigen::MatrixXd angles = mocap.bryant_rad;
   for (int a = 0; a < 3; ++a) angles.col(a) = UnwrapAngle(angles.col(a));
@@ -77,9 +77,8 @@ void ReadPose(const FlightLog& log, const ObservationOptions& observation, const
       ground != log.metadata.end() ? std::stod(ground->second) : mocap.position_w_m.col(2).minCoeff();
   // A log may start and end in the air (its lowest height is then a hover's): near that height the
   // rotors' thrust decides.
-  const std::vector<char> carried = states->airborne;
   for (int k = 0; k < states->size(); ++k)
-    states->airborne[k] = carried[k] || states->position_w_m(k, 2) - ground_z >= options.ground_clearance_m;
+    if (states->position_w_m(k, 2) - ground_z >= options.ground_clearance_m) states->airborne[k] = 1;
 }
 
 // Without a pose: the attitude is the integrated gyro (the rotation error of a window needs only the
@@ -121,7 +120,7 @@ LoggedStates ReadLoggedStates(const FlightLog& log, const Vehicle& vehicle, cons
     states.airborne[k] = model.parameters.rotor.kt * states.rotor_speed_radps.row(k).squaredNorm() >=
                          options.airborne_thrust_share * weight_n;
   if (log.mocap)
-    ReadPose(log, observation, options, &states);
+    ReadPose(log, processed, options, &states);
   else
     IntegrateGyro(&states);
   if (options.scope == PredictionScope::kWhole) std::fill(states.airborne.begin(), states.airborne.end(), 1);
