@@ -1,5 +1,8 @@
 #include "rotorid/predict/diagnosis_prediction.h"
 
+#include <algorithm>
+
+#include "predict/predict_json.h"
 #include "predict/rollout.h"
 #include "rotorid/core/error.h"
 #include "rotorid/ident/tls.h"
@@ -54,18 +57,12 @@ void AddStepPredictions(const std::vector<StepPrediction>& predictions, nlohmann
     const StepPrediction& p = predictions[k];
     nlohmann::json j = {{"windows", p.curves.windows}};
     if (!p.unavailable.empty()) j["unavailable"] = p.unavailable;
-    for (const char* which : {"mae", "naive_mae"}) {
-      nlohmann::json groups = nlohmann::json::object();
-      for (int g = 0; g < kNumPredictionGroups; ++g) {
-        const std::vector<double>& curve = std::string(which) == "mae" ? p.curves.mae[g] : p.curves.naive_mae[g];
-        if (curve.empty()) continue;
-        nlohmann::json at = nlohmann::json::object();
-        for (int h : PredictionSummarySteps(static_cast<int>(curve.size())))
-          if (h > 1) at[std::to_string(h)] = JsonNumber(curve[h - 1]);
-        groups[kPredictionGroupNames[g]] = at;
-      }
-      j[which] = groups;
-    }
+    // h = 10 and N, the steps the diagnosis compares (every window scores the rotation).
+    const int horizon = static_cast<int>(p.curves.mae[static_cast<int>(PredictionGroup::kRotation)].size());
+    std::vector<int> steps = PredictionSummarySteps(horizon);
+    steps.erase(std::remove(steps.begin(), steps.end(), 1), steps.end());
+    j["mae"] = internal::GroupsAtSteps(p.curves.mae, steps);
+    j["naive_mae"] = internal::GroupsAtSteps(p.curves.naive_mae, steps);
     if (k == 0)
       (*report)["baseline"]["prediction"] = j;
     else if (report->contains("steps") && k - 1 < (*report)["steps"].size())

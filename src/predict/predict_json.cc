@@ -1,3 +1,5 @@
+#include "predict/predict_json.h"
+
 #include <string>
 
 #include "rotorid/predict/predict.h"
@@ -20,33 +22,23 @@ nlohmann::json CurvesJson(const std::array<std::vector<double>, kNumPredictionGr
   return out;
 }
 
-// {group: {"1": MAE(1), "10": MAE(10), "N": MAE(N)}}; with `naive`, the ratio model / naive instead.
-nlohmann::json AtSummarySteps(const PredictionCurves& curves, const std::vector<int>& steps, bool ratio) {
-  nlohmann::json out = nlohmann::json::object();
-  for (int g = 0; g < kNumPredictionGroups; ++g) {
-    if (curves.mae[g].empty()) continue;
-    nlohmann::json at = nlohmann::json::object();
-    for (int h : steps) {
-      const double mae = curves.mae[g][h - 1];
-      at[std::to_string(h)] = JsonNumber(ratio ? mae / curves.naive_mae[g][h - 1] : mae);
-    }
-    out[kPredictionGroupNames[g]] = at;
-  }
-  return out;
+// {group: {"<h>": MAE(h) / naive MAE(h)}}.
+nlohmann::json RatiosAtSteps(const PredictionCurves& curves, const std::vector<int>& steps) {
+  std::array<std::vector<double>, kNumPredictionGroups> ratios;
+  for (int g = 0; g < kNumPredictionGroups; ++g)
+    for (size_t h = 0; h < curves.mae[g].size(); ++h) ratios[g].push_back(curves.mae[g][h] / curves.naive_mae[g][h]);
+  return internal::GroupsAtSteps(ratios, steps);
 }
 
 nlohmann::json FlightsJson(const PredictResult& result, const std::vector<int>& steps) {
   nlohmann::json flights = nlohmann::json::array();
   for (const FlightPrediction& f : result.flights) {
-    nlohmann::json naive = nlohmann::json::object();
-    PredictionCurves naive_only = f.curves;
-    naive_only.mae = f.curves.naive_mae;
     flights.push_back({{"file", f.file},
                        {"windows", f.curves.windows},
                        {"states", f.states},
-                       {"mae", AtSummarySteps(f.curves, steps, false)},
-                       {"naive_mae", AtSummarySteps(naive_only, steps, false)},
-                       {"ratio_to_naive", AtSummarySteps(f.curves, steps, true)}});
+                       {"mae", internal::GroupsAtSteps(f.curves.mae, steps)},
+                       {"naive_mae", internal::GroupsAtSteps(f.curves.naive_mae, steps)},
+                       {"ratio_to_naive", RatiosAtSteps(f.curves, steps)}});
   }
   return flights;
 }
@@ -79,7 +71,7 @@ nlohmann::json PredictJson(const PredictResult& result) {
                                {"windows", result.pooled.windows},
                                {"mae", CurvesJson(result.pooled.mae)},
                                {"naive_mae", CurvesJson(result.pooled.naive_mae)},
-                               {"ratio_to_naive", AtSummarySteps(result.pooled, steps, true)},
+                               {"ratio_to_naive", RatiosAtSteps(result.pooled, steps)},
                                {"flights", FlightsJson(result, steps)}};
   return {{"rotorid_version", kRotoridVersion},
           {"command", "predict"},
@@ -91,4 +83,19 @@ nlohmann::json PredictJson(const PredictResult& result) {
           {"checks", ChecksJson(result.checks)}};
 }
 
+namespace internal {
+
+nlohmann::json GroupsAtSteps(const std::array<std::vector<double>, kNumPredictionGroups>& curves,
+                             const std::vector<int>& steps) {
+  nlohmann::json out = nlohmann::json::object();
+  for (int g = 0; g < kNumPredictionGroups; ++g) {
+    if (curves[g].empty()) continue;
+    nlohmann::json at = nlohmann::json::object();
+    for (int h : steps) at[std::to_string(h)] = JsonNumber(curves[g][h - 1]);
+    out[kPredictionGroupNames[g]] = at;
+  }
+  return out;
+}
+
+}  // namespace internal
 }  // namespace rotorid
