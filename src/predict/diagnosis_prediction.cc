@@ -27,6 +27,9 @@ StepPrediction PredictHeldOut(const std::map<std::string, double>& values, const
     prediction.unavailable = e.what();
   }
   prediction.curves = sums.Mean();
+  if (prediction.unavailable.empty() && prediction.curves.windows == 0)
+    prediction.unavailable = "no window of " + std::to_string(settings.horizon_steps) +
+                             " steps lies in the held-out flights' " + PredictionScopeName(settings.scope) + " scope";
   return prediction;
 }
 
@@ -44,10 +47,17 @@ std::vector<StepPrediction> PredictDiagnosisSteps(const Diagnosis& diagnosis, co
   refine.effects.clear();
   for (const SelectionStep& step : diagnosis.steps) {
     refine.effects.push_back(step.added);
-    const RefineResult refined = Refine(linear, refine);
-    out.push_back(PredictHeldOut(NamedParameters(linear.system, PredictionChi(refined.refined)), refined.effects,
-                                 held_out, identify.observation, settings));
-    out.back().effects = refine.effects;
+    // A step whose refinement fails costs its prediction, not the diagnosis.
+    StepPrediction prediction;
+    try {
+      const RefineResult refined = Refine(linear, refine);
+      prediction = PredictHeldOut(NamedParameters(linear.system, PredictionChi(refined.refined)), refined.effects,
+                                  held_out, identify.observation, settings);
+    } catch (const Error& e) {
+      prediction.unavailable = e.what();
+    }
+    prediction.effects = refine.effects;
+    out.push_back(std::move(prediction));
   }
   return out;
 }
