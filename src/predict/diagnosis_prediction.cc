@@ -12,15 +12,17 @@
 namespace rotorid {
 namespace {
 
-// The held-out flights flown with these parameters and effects, pooled.
-StepPrediction PredictHeldOut(const std::map<std::string, double>& values, const Effects& effects,
-                              const std::vector<FlightData>& held_out, const ObservationOptions& observation,
-                              const PredictOptions& settings) {
+// The held-out flights flown with these parameters and effects, pooled; `label` names the model in
+// the reason it cannot be flown.
+StepPrediction PredictHeldOut(const std::string& label, const std::map<std::string, double>& values,
+                              const Effects& effects, const std::vector<FlightData>& held_out,
+                              const ObservationOptions& observation, const PredictOptions& settings) {
   StepPrediction prediction;
   internal::ErrorSums sums(settings.horizon_steps, false);
   try {
     for (const FlightData& flight : held_out) {
-      const internal::FlownModel model = internal::FlownModelFromValues(values, effects, flight.vehicle);
+      internal::FlownModel model = internal::FlownModelFromValues(values, effects, flight.vehicle);
+      model.source = label;
       sums.Add(internal::ScoreSegments({flight.log}, flight.vehicle, model, observation, settings, nullptr));
     }
   } catch (const Error& e) {
@@ -41,8 +43,8 @@ std::vector<StepPrediction> PredictDiagnosisSteps(const Diagnosis& diagnosis, co
   if (held_out.empty() || training.empty()) return {};
   const IdentificationResult linear = Identify(training, identify);
   std::vector<StepPrediction> out;
-  out.push_back(PredictHeldOut(NamedParameters(linear.system, PredictionChi(linear.solution)), Effects(), held_out,
-                               identify.observation, settings));
+  out.push_back(PredictHeldOut("the linear model", NamedParameters(linear.system, PredictionChi(linear.solution)),
+                               Effects(), held_out, identify.observation, settings));
   RefineOptions refine;
   refine.effects.clear();
   for (const SelectionStep& step : diagnosis.steps) {
@@ -51,8 +53,10 @@ std::vector<StepPrediction> PredictDiagnosisSteps(const Diagnosis& diagnosis, co
     StepPrediction prediction;
     try {
       const RefineResult refined = Refine(linear, refine);
-      prediction = PredictHeldOut(NamedParameters(linear.system, PredictionChi(refined.refined)), refined.effects,
-                                  held_out, identify.observation, settings);
+      std::string label = "the model with";
+      for (EffectKind kind : refine.effects) label += std::string(" ") + EffectName(kind);
+      prediction = PredictHeldOut(label, NamedParameters(linear.system, PredictionChi(refined.refined)),
+                                  refined.effects, held_out, identify.observation, settings);
     } catch (const Error& e) {
       prediction.unavailable = e.what();
     }
