@@ -156,6 +156,7 @@ ErrorSums ScoreSegments(const std::vector<FlightLog>& segments, const Vehicle& v
                         const ObservationOptions& observation, const PredictOptions& options, std::string* states) {
   ErrorSums sums(options.horizon_steps, false);
   for (const FlightLog& segment : segments) {
+    if (segment.duration_s() < options.horizon_steps * options.dt_s) continue;  // no window fits
     const LoggedStates logged = ReadLoggedStates(segment, vehicle, model, observation, options);
     sums.Add(ScoreFlight(logged, vehicle, model, options));
     if (states) *states = logged.description;
