@@ -1,6 +1,5 @@
 #include "rotorid/predict/predict.h"
 
-#include <iomanip>
 #include <iostream>
 #include <memory>
 
@@ -23,8 +22,12 @@ Command AddPredictCommand(CLI::App& root) {
                                     "scores it against the log and the naive predictor x(t+h) = x(t)");
   CLI::App* app = command.app;
   PredictOptions& p = o->predict;
-  app->add_option("--params", p.params_path, "identify or refine JSON report")->required()->check(CLI::ExistingFile);
-  app->add_option("--vehicle", p.vehicle_paths, "vehicle file (YAML), paired with --log")->required();
+  app->add_option("--params", p.params_path, "identify/refine report (or simulate --truth)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app->add_option("--vehicle", p.vehicle_paths, "vehicle file (YAML), paired with --log")
+      ->required()
+      ->check(CLI::ExistingFile);
   app->add_option("--log", p.log_paths, "flight log, paired with --vehicle")->required()->check(CLI::ExistingFile);
   app->add_option("--window", o->windows, "START,END of each --log, in order")->check(ParsesWith(ParseTimeWindow));
   app->add_option("--segment", o->segment, "auto or none")
@@ -35,7 +38,9 @@ Command AddPredictCommand(CLI::App& root) {
   app->add_option("--horizon", p.horizon_steps, "steps ahead N")->capture_default_str();
   app->add_option("--stride", p.stride, "every K-th start instant")->capture_default_str();
   app->add_option("--dt", p.dt_s, "prediction grid (s)")->capture_default_str();
-  app->add_option("--scope", o->scope, "airborne or whole")->check(CLI::IsMember({"airborne", "whole"}));
+  app->add_option("--scope", o->scope, "airborne or whole")
+      ->check(CLI::IsMember({"airborne", "whole"}))
+      ->capture_default_str();
   app->add_option("--block", p.block, "linear or refined (default: refined when present)")
       ->check(CLI::IsMember({"linear", "refined"}));
   app->add_option("--set", o->overrides, "NAME=VALUE: fly with this report parameter replaced (repeatable)")
@@ -56,21 +61,7 @@ Command AddPredictCommand(CLI::App& root) {
     const std::string report = o->report_dir.empty() ? "" : WritePredictReport(o->report_dir, result);
     if (!o->quiet) {
       for (const FlightInputSummary& input : result.inputs) std::cout << input.ConsoleLine() << "\n";
-      std::cout << "rotorid predict: " << result.block << " model of " << o->predict.params_path << ", "
-                << result.pooled.windows << " windows (" << PredictionScopeName(o->predict.scope) << ")\n"
-                << "MAE model / naive at h =";
-      const std::vector<int> steps = PredictionSummarySteps(o->predict.horizon_steps);
-      for (int h : steps) std::cout << " " << h;
-      std::cout << " steps\n";
-      for (int g = 0; g < kNumPredictionGroups; ++g) {
-        if (result.pooled.mae[g].empty()) continue;
-        std::cout << "  " << std::left << std::setw(17) << kPredictionGroupNames[g] << std::right;
-        for (int h : steps)
-          std::cout << std::setprecision(3) << "  " << result.pooled.mae[g][h - 1] << " / "
-                    << result.pooled.naive_mae[g][h - 1];
-        std::cout << "\n";
-      }
-      if (!report.empty()) std::cout << "report: " << report << "\n";
+      std::cout << PredictBriefReport(result) << (report.empty() ? "" : "report: " + report + "\n");
     }
     return PrintChecks(result.checks, o->quiet);
   };

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "rotorid/core/text.h"
 #include "rotorid/predict/predict.h"
 #include "rotorid/report/checks_json.h"
 #include "rotorid/report/input_json.h"
@@ -81,6 +82,25 @@ nlohmann::json PredictJson(const PredictResult& result) {
           {"prediction", prediction},
           {"input", InputJson(result.inputs)},
           {"checks", ChecksJson(result.checks)}};
+}
+
+std::string PredictBriefReport(const PredictResult& result) {
+  const PredictOptions& o = result.options;
+  const std::vector<int> steps = PredictionSummarySteps(o.horizon_steps);
+  std::string text = "rotorid predict: " + result.block + " model of " + o.params_path + ", " +
+                     std::to_string(result.pooled.windows) + " windows (" + PredictionScopeName(o.scope) +
+                     ")\nMAE model / naive at h =";
+  for (int h : steps) text += " " + std::to_string(h);
+  text += " steps\n";
+  for (int g = 0; g < kNumPredictionGroups; ++g) {
+    if (result.pooled.mae[g].empty()) continue;
+    const std::string name = kPredictionGroupNames[g];
+    text += "  " + name + std::string(17 - name.size(), ' ');
+    for (int h : steps)
+      text += "  " + ShortNumber(result.pooled.mae[g][h - 1]) + " / " + ShortNumber(result.pooled.naive_mae[g][h - 1]);
+    text += "\n";
+  }
+  return text;
 }
 
 namespace internal {

@@ -106,6 +106,9 @@ PredictResult RunPredict(const PredictOptions& options);
 // naive_mae, flights[]}, input, checks. docs/report_format.md lists the keys.
 nlohmann::json PredictJson(const PredictResult& result);
 
+// For the console: what was flown, then per group the MAE of the model / naive at h = 1, 10, N.
+std::string PredictBriefReport(const PredictResult& result);
+
 // The HTML report: MAE(h) per group beside the naive curve (inline SVG), the table at h = 1, 10, N,
 // per-flight tables and the checks; WritePredictReport writes it as DIR/predict.html and returns
 // that path.
