@@ -113,6 +113,18 @@ TEST_F(CliPredictTest, ALogWithoutAPoseScoresRotationAndRatesOnly) {
   EXPECT_LT(mae["rotation"][19].get<double>(), 0.2 * r["prediction"]["naive_mae"]["rotation"][19].get<double>());
 }
 
+TEST_F(CliPredictTest, AWindowCutsTheLog) {
+  int code = -1;
+  const nlohmann::json r = Predict({"--params", *dir_ + "/identify.json", "--log", *dir_ + "/pose.csv", "--window",
+                                    "2,7", "--segment", "none", "--horizon", "10"},
+                                   &code);
+  // 2.00 .. 7.00 s at 100 Hz: 501 samples, at most 491 start instants of 10 steps.
+  EXPECT_GT(r["prediction"]["windows"].get<int>(), 400);
+  EXPECT_LE(r["prediction"]["windows"].get<int>(), 491);
+  EXPECT_DOUBLE_EQ(r["input"]["flights"][0]["window_s"][0].get<double>(), 2.0);
+  EXPECT_EQ(r["settings"]["segment"], "none");
+}
+
 TEST_F(CliPredictTest, UsageErrors) {
   const std::string log = *dir_ + "/pose.csv", vehicle = *dir_ + "/A.yaml", params = *dir_ + "/identify.json";
   for (const std::vector<std::string>& bad :
