@@ -133,6 +133,7 @@ Command AddDiagnoseCommand(CLI::App& root);
 Command AddVehicleCommand(CLI::App& root);
 Command AddExportCommand(CLI::App& root);
 Command AddBatchCommand(CLI::App& root);
+Command AddPredictCommand(CLI::App& root);
 
 // A CLI11 check (empty when valid, else the message) from a parser that throws rotorid::Error, so
 // that a bad value is a usage error found while parsing.

@@ -6,6 +6,7 @@
 #include "rotorid/diagnosis/diagnosis.h"
 #include "rotorid/diagnosis/diagnosis_checks.h"
 #include "rotorid/diagnosis/diagnosis_json.h"
+#include "rotorid/predict/diagnosis_prediction.h"
 #include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
 #include "rotorid/report/json.h"
@@ -90,6 +91,8 @@ Command AddDiagnoseCommand(CLI::App& root) {
                                      {"tls", TlsOptionsJson(diagnosis.identify.tls)},
                                      {"diagnosis", DiagnosisOptionsJson(diagnosis)}};
     nlohmann::json report = DiagnosisJson(result);
+    AddStepPredictions(PredictDiagnosisSteps(result, training.flights, validation.flights, diagnosis.identify),
+                       &report);
     report["rotorid_version"] = kRotoridVersion;
     report["command"] = "diagnose";
     report["settings"] = settings;

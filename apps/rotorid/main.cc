@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   const std::vector<Command> commands = {AddSimulateCommand(root), AddIdentifyCommand(root), AddValidateCommand(root),
                                          AddRefineCommand(root),   AddDelayCommand(root),    AddAblateCommand(root),
                                          AddDiagnoseCommand(root), AddVehicleCommand(root),  AddExportCommand(root),
-                                         AddBatchCommand(root)};
+                                         AddBatchCommand(root),    AddPredictCommand(root)};
   ApplyConventions(commands);
   AddConfigOption(&root);
   if (const std::string unknown = UnknownSubcommand(root, argc, argv); !unknown.empty())

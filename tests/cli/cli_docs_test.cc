@@ -34,8 +34,8 @@ TEST(CliDocsTest, EveryOptionOfEverySubcommandIsDocumented) {
   ASSERT_FALSE(docs.empty());
   const auto root = RunRotorid({"--help"});
   ASSERT_EQ(root.exit_code, 0);
-  const std::vector<std::string> subcommands = {"simulate", "identify", "validate", "refine", "delay",
-                                                "ablate",   "diagnose", "vehicle",  "export", "batch"};
+  const std::vector<std::string> subcommands = {"simulate", "identify", "validate", "refine", "delay",  "ablate",
+                                                "diagnose", "vehicle",  "export",   "batch",  "predict"};
   for (const std::string& sub : subcommands) {
     EXPECT_NE(root.out.find(sub), std::string::npos) << sub << " missing from rotorid --help";
     EXPECT_NE(docs.find("`" + sub + "`"), std::string::npos) << "docs/cli.md does not list " << sub;

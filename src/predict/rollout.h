@@ -1,0 +1,76 @@
+#pragma once
+
+// Internal: the states a log gives on the prediction grid, and the open-loop rollouts from them.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "rotorid/core/flight_log.h"
+#include "rotorid/core/vehicle.h"
+#include "rotorid/ident/observation.h"
+#include "rotorid/model/effects.h"
+#include "rotorid/model/parameters.h"
+#include "rotorid/predict/predict.h"
+
+namespace rotorid::internal {
+
+// The model a report describes for one configuration: what the simulator's physics takes.
+struct FlownModel {
+  std::string source;  // the report's file, for messages
+  std::string block;   // the report block it came from
+  VehicleParameters parameters;
+  Effects effects;
+};
+
+// The model of `vehicle`'s configuration from named parameter values ("kt", "kd", "<config>.I_xx",
+// ...; a missing one is 0) and effects.
+FlownModel FlownModelFromValues(const std::map<std::string, double>& values, const Effects& effects,
+                                const Vehicle& vehicle);
+
+// One flight's states on the uniform prediction grid t_k = t_s[0] + k dt.
+struct LoggedStates {
+  Eigen::VectorXd t_s;
+  double dt_s = 0.0;
+  double gravity_mps2 = 0.0;
+  bool has_pose = false;                        // position and velocity verified (motion capture)
+  Eigen::MatrixX3d position_w_m;                // O_d, world (zeros without a pose)
+  Eigen::MatrixX3d velocity_w_mps;              // the log's velocity columns, else the differentiated position
+  std::vector<Eigen::Quaterniond> attitude_wb;  // body to world; without a pose the integrated gyro
+  Eigen::MatrixX3d angular_velocity_b_radps;    // the gyro corrected by the report's IMU effects
+  Eigen::MatrixXd rotor_speed_radps;            // acting: the logged rotor signal through the rotor-signal effects
+  std::vector<char> airborne;                   // the ground-contact rule per sample
+  std::string description;                      // where each state came from, for the report
+
+  int size() const { return static_cast<int>(t_s.size()); }
+};
+
+// Reads `log` (a segment of a whole log whose `# ground_z:` metadata is set when it has a pose) onto
+// the prediction grid. `observation`: the report's signal processing (its low-pass differentiates the
+// position, and the rotor-signal effects see the flight as the identification did).
+LoggedStates ReadLoggedStates(const FlightLog& log, const Vehicle& vehicle, const FlownModel& model,
+                              const ObservationOptions& observation, const PredictOptions& options);
+
+// Sums of the errors over windows, per group and step ahead (index h - 1), and the number of
+// windows that verify each group.
+struct ErrorSums {
+  std::array<std::vector<double>, kNumPredictionGroups> model, naive;
+  std::array<long, kNumPredictionGroups> windows = {0, 0, 0, 0};
+  explicit ErrorSums(int horizon_steps = 0, bool with_pose = false);
+  void Add(const ErrorSums& other);
+  PredictionCurves Mean() const;
+};
+
+// Flies the model from every start k = 0, K, 2K, ... whose window k..k+N lies in the scope and adds
+// the errors. Throws rotorid::Error when the model's body cannot be integrated.
+ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const FlownModel& model,
+                      const PredictOptions& options);
+
+// ScoreFlight over the segments of a log; `states` (may be null) gets how the last one's states
+// were read.
+ErrorSums ScoreSegments(const std::vector<FlightLog>& segments, const Vehicle& vehicle, const FlownModel& model,
+                        const ObservationOptions& observation, const PredictOptions& options, std::string* states);
+
+}  // namespace rotorid::internal
