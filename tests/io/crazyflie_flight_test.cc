@@ -7,10 +7,12 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/io/column_map.h"
 #include "rotorid/io/flight_source.h"
@@ -236,6 +238,60 @@ TEST(CrazyflieFlight, MocapIsResampledOntoImuTimesWithContinuousYaw) {
   EXPECT_EQ(log.metadata.at("mocap_held_samples"), "5");  // 2 before the first pose, 3 after the last
 }
 
+// The firmware's IMU events (estGyroscope, estAcceleration at 1 kHz) beside a 100 Hz
+// fixed-frequency block with the rotor signal: every value is linear in time, so the merge onto
+// the gyro's times is exact, and gyro records outside the block's span are left out.
+std::string EventImuLog(bool with_events) {
+  LogWriter w;
+  w.Put(static_cast<uint16_t>(3));
+  w.Event(10, "estGyroscope", {"gyro.x(f)", "gyro.y(f)", "gyro.z(f)"});
+  w.Event(11, "estAcceleration", {"acc.x(f)", "acc.y(f)", "acc.z(f)"});
+  w.Event(0xFFFF, "fixedFrequency", {"rpm.m1(H)", "rpm.m2(H)", "rpm.m3(H)", "rpm.m4(H)", "pm.vbatMV(H)"});
+  const uint64_t t0 = 2000000;
+  for (int i = 0; i < 300; ++i) {
+    const uint64_t t_us = t0 + 1000 * i;  // gyro at 1 kHz; acc 15 us later (as the firmware's)
+    if (with_events) {
+      w.Put(static_cast<uint16_t>(10)).Put(t_us).Put(static_cast<float>(i)).Put(0.0f).Put(0.0f);
+      w.Put(static_cast<uint16_t>(11)).Put(t_us + 15).Put(0.0f).Put(0.0f).Put(static_cast<float>(1.0 + 1e-4 * i));
+    }
+    if (i % 10 == 3 && i < 290) {  // the block from 2.003 s to 2.283 s, every 10 ms
+      w.Put(static_cast<uint16_t>(0xFFFF)).Put(t_us);
+      for (int m = 1; m <= 4; ++m) w.Put(static_cast<uint16_t>(10000 + 10 * i + m));
+      w.Put(static_cast<uint16_t>(4000 - i));
+    }
+  }
+  return w.Finish();
+}
+
+TEST(CrazyflieFlight, ImuEventsMergeWithTheFixedFrequencyBlock) {
+  const FlightLog log = FromBytes(EventImuLog(true));
+  // Gyro records 3..283 lie inside the block's span: 281 samples at the gyro's own times.
+  ASSERT_EQ(log.num_samples(), 281);
+  EXPECT_DOUBLE_EQ(log.t_s[0], 2.003);
+  EXPECT_DOUBLE_EQ(log.t_s[280], 2.283);
+  for (int k = 0; k < log.num_samples(); ++k) {
+    const int i = k + 3;  // the gyro record
+    EXPECT_NEAR(log.gyro_radps(k, 0), i * kDegToRad, 1e-9);
+    // The accelerometer at the gyro's time, 15 us before its own record: 1 + 1e-4 (i - 0.015).
+    EXPECT_NEAR(log.acc_mps2(k, 2), (1.0 + 1e-4 * (i - 0.015)) * kStandardGravity, 2e-6);
+    // The 100 Hz rpm between its records: 10000 + 10 i + m rev/min.
+    EXPECT_NEAR(log.rotor_radps(k, 1), (10000.0 + 10.0 * i + 2.0) * kRpmToRadps, 1e-6);
+    EXPECT_NEAR((*log.voltage_v)[k], (4000.0 - i) * 1e-3, 1e-9);
+  }
+  EXPECT_EQ(log.metadata.at("imu_event"),
+            "estGyroscope (300 records, 1000.0 Hz) + estAcceleration (300 records, 1000.0 Hz)");
+  EXPECT_EQ(log.metadata.at("rotor_signal_source"),
+            "fixedFrequency rpm.m1..rpm.m4 (rpm -> rad/s), 100.0 Hz interpolated linearly onto the IMU times");
+  EXPECT_NE(log.metadata.at("time_base").find("from 2.0030 to 2.2830 s, where every stream has records: 281 of 300"),
+            std::string::npos)
+      << log.metadata.at("time_base");
+  // Without the events the block's missing gyro is named, and the events looked for.
+  ExpectError(EventImuLog(false),
+              "event 'fixedFrequency' has no gyro.x, gyro.y, gyro.z (looked for gyro.x, gyro.y, gyro.z; the event "
+              "logs: rpm.m1, rpm.m2, rpm.m3, rpm.m4, pm.vbatMV), and the log has no records of the IMU events "
+              "'estGyroscope' and 'estAcceleration'");
+}
+
 TEST(CrazyflieFlight, VehicleFilesDescribeTheCrazyflies) {
   const std::string dir = testing::SourceDir() + "/data/vehicles/";
   for (const auto& [file, name, mass] : std::vector<std::tuple<std::string, std::string, double>>{
@@ -438,6 +494,40 @@ rotors: {columns: [motor.m1, motor.m2, motor.m3, motor.m4], unit: pwm}
     rpm.rotor_signal = "rpm";
     EXPECT_THROW(LoadCrazyflieFlight(*root + "/raw/" + name, 4, rpm), Error);
   }
+}
+
+// The micro-SD layout with the IMU as events (crazyflie-imrc-usd-events, SOURCE.md): 1009 Hz
+// estGyroscope/estAcceleration beside a 504.5 Hz or 100.9 Hz fixed-frequency block with the RPM
+// deck. `rotorid identify` on the two hover flights with the 39.0 g vehicle gives kt within 2 % of
+// the source's 1.925e-8 N s^2 (plot_rpm.py's kf; measured 1.90e-8 and 1.89e-8).
+TEST(CrazyflieFlightRealData, UsdEventImuHoverGivesTheSourcesKt) {
+  const auto root = testing::SharedDataPath("real/crazyflie-imrc-usd-events/raw");
+  if (!root) GTEST_SKIP() << "shared IMRC uSD event logs not present";
+  const std::string dir = testing::MakeTempDir("cf-usd-events");
+  std::string vehicle = testing::Slurp(testing::SourceDir() + "/data/vehicles/crazyflie21_brushed.yaml");
+  const size_t mass_at = vehicle.find("\nmass: 0.0347\n");
+  ASSERT_NE(mass_at, std::string::npos);
+  vehicle.replace(mass_at, 14, "\nmass: 0.039\n");  // SOURCE.md: 39.0 g
+  WriteFileAtomically(dir + "/cf39.yaml", vehicle);
+  for (const auto& [name, block_hz] :
+       std::vector<std::pair<std::string, double>>{{"hover_500hz", 504.5}, {"hover_100hz", 100.9}}) {
+    SCOPED_TRACE(name);
+    const std::string path = *root + "/" + name;
+    const FlightLog log = LoadCrazyflieFlight(path, 4);
+    EXPECT_NEAR(1.0 / log.MedianDt(), 1009.0, 5.0);
+    EXPECT_NEAR(log.duration_s(), 3.0, 0.02);
+    EXPECT_NE(log.metadata.at("rotor_signal_source").find(FormatValue("%.1f Hz", block_hz)), std::string::npos);
+    EXPECT_NEAR(log.acc_mps2.col(2).mean(), kStandardGravity, 0.3);  // hover: about +g
+    EXPECT_GT(log.rotor_radps.minCoeff(), 1500.0);                   // 18.7-23.5 k rpm: airborne throughout
+    const testing::CommandResult run = testing::RunRotorid(
+        {"identify", "--vehicle", dir + "/cf39.yaml", "--log", path, "--allow-partial", "--json", dir + "/id.json"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/id.json"));
+    const double kt = report.at("linear").at("parameters").at("kt").at("value").get<double>();
+    std::cout << "  " << name << ": kt " << kt << " N s^2 (source 1.925e-8)\n";
+    EXPECT_NEAR(kt / 1.925e-8, 1.0, 0.02);
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
