@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -373,7 +374,7 @@ TEST(BlackboxCli, IdentifyReadsTheTuDelftLogDirectly) {
       << run.err;
   const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/id.json"));
   const double kt = report.at("linear").at("parameters").at("kt").at("value").get<double>();
-  EXPECT_NEAR(kt / 0.3, 0.621e-6, 0.05e-6);  // the vehicle file's placeholder mass: 0.3 kg
+  EXPECT_NEAR(kt / 0.428, 0.621e-6, 0.05e-6);  // the vehicle's 0.428 kg
 }
 
 // The rotor-acceleration term of the TU Delft quad (docs/blackbox.md 6): `rotorid refine --effects
@@ -388,9 +389,9 @@ TEST(BlackboxCli, RotorAccelerationTermMatchesThePaper) {
   const std::string dir = testing::MakeTempDir("blackbox_rotor_inertia");
   const std::string vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
   std::string heavy_text = testing::Slurp(vehicle);
-  const size_t mass_at = heavy_text.find("\nmass: 0.3\n");
+  const size_t mass_at = heavy_text.find("\nmass: 0.428\n");
   ASSERT_NE(mass_at, std::string::npos);
-  heavy_text.replace(mass_at, 11, "\nmass: 1.2\n");
+  heavy_text.replace(mass_at, 13, "\nmass: 1.712\n");
   const std::string heavy = dir + "/heavy.yaml";
   std::ofstream(heavy) << heavy_text;
 
@@ -429,6 +430,43 @@ TEST(BlackboxCli, RotorAccelerationTermMatchesThePaper) {
   const double mz_refined = placeholder.report.at("held_out").at("refined").at("relative_error_pct").at("Mz");
   EXPECT_GT(mz_linear, 300.0);
   EXPECT_LT(mz_refined, 0.6 * mz_linear);  // LOG00230 held out: 390 % -> 181 %
+}
+
+// The TU Delft vehicle file with its real mass and rectangle (0.428 kg, rotors at x +-45.5 mm,
+// y +-63.5 mm; SOURCE.md): the rotor-order check passes, and with the uplinked velocity the
+// rotor drag can be refined (it needed velocity). LOG00271 refined with delay, rotor_inertia and
+// rotor_drag, LOG00281 held out: kt against Table I's kt/m = 0.621e-6 times 0.428 kg = 2.66e-7
+// N s^2 (measured 2.70e-7), k_d 1.01e-5 +- 3.2e-6 N s/m per rad/s, held-out Mx/My/Mz 188/84/448 %
+// -> 93/56/47 %.
+TEST(BlackboxCli, RealVehicleFileRefinesRotorDragWithTheUplinkedVelocity) {
+  const auto p271 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  const auto p281 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00281.BFL");
+  if (!p271 || !p281) GTEST_SKIP() << "TU Delft logs absent";
+  const std::string dir = testing::MakeTempDir("blackbox_real_vehicle");
+  const std::string vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
+  const testing::CommandResult run =
+      testing::RunRotorid({"refine", "--vehicle", vehicle, "--log", *p271, "--validate-vehicle", vehicle,
+                           "--validate-log", *p281, "--cutoff-hz", "30", "--all-parameters", "--allow-partial",
+                           "--effects", "delay,rotor_inertia,rotor_drag", "--json", dir + "/refine.json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/refine.json"));
+  for (const nlohmann::json& check : report.at("checks")) {
+    if (check.at("name") == "rotor_order" || check.at("name") == "rotor_spins") {
+      EXPECT_EQ(check.at("status"), "ok") << check.at("message");
+    }
+  }
+  const nlohmann::json& refined = report.at("refined");
+  EXPECT_NEAR(refined.at("parameters").at("kt").at("value").get<double>() / (0.621e-6 * 0.428), 1.0, 0.05);
+  const nlohmann::json& drag = refined.at("effects").at("rotor_drag_coefficient");
+  ASSERT_TRUE(drag.at("enabled").get<bool>());
+  EXPECT_GT(drag.at("value").get<double>(), 2.0 * drag.at("std").get<double>());
+  EXPECT_FALSE(drag.at("on_bound").get<bool>());
+  const nlohmann::json& before = report.at("held_out").at("linear").at("relative_error_pct");
+  const nlohmann::json& after = report.at("held_out").at("refined").at("relative_error_pct");
+  for (const char* component : {"Fz", "Mx", "My", "Mz"})
+    EXPECT_LT(after.at(component).get<double>(), before.at(component).get<double>()) << component;
+  EXPECT_LT(after.at("Mz").get<double>(), 0.2 * before.at("Mz").get<double>());  // 448 % -> 47 %
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
