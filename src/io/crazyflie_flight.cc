@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 #include <vector>
 
 #include "rotorid/core/error.h"
@@ -228,54 +229,109 @@ void AddVoltage(const UsdEventTable& block, const TimeBase& base, FlightLog* log
   }
 }
 
-// Motion capture from the pose event, on the IMU time base. Leaves `log->mocap` empty (and says
-// why in the metadata) when the event holds no usable pose.
-void AddMocap(const UsdEventTable& pose, FlightLog* log) {
+// A pose source's records: position (m), quaternion (w, x, y, z), and the velocity (m/s, world)
+// when the source has it. Rows are the event's records.
+struct PoseRecords {
+  const UsdEventTable* event = nullptr;
+  Eigen::MatrixXd values;  // x, y, z, qw, qx, qy, qz[, vx, vy, vz]
+  std::string description;
+};
+
+// The firmware's 32-bit compressed unit quaternion (quatcompress.h): the index of the largest
+// component of (x, y, z, w) in the top 2 bits, then the other three, each a sign bit and 9 bits of
+// |q_i| / (1/sqrt(2)); the largest is the positive rest of the unit norm. Returns (w, x, y, z).
+Eigen::Vector4d DecompressQuaternion(uint32_t packed) {
+  constexpr uint32_t kMask = (1u << 9) - 1;
+  const int largest = static_cast<int>(packed >> 30);
+  double xyzw[4];
+  double sum_squares = 0.0;
+  for (int i = 3; i >= 0; --i) {
+    if (i == largest) continue;
+    const double magnitude = M_SQRT1_2 * static_cast<double>(packed & kMask) / kMask;
+    xyzw[i] = ((packed >> 9) & 1u) ? -magnitude : magnitude;
+    sum_squares += xyzw[i] * xyzw[i];
+    packed >>= 10;
+  }
+  xyzw[largest] = std::sqrt(std::max(0.0, 1.0 - sum_squares));
+  return {xyzw[3], xyzw[0], xyzw[1], xyzw[2]};
+}
+
+// Motion capture as the radio delivered it: the estPose event's locSrv.x/y/z (m) and locSrv.q*.
+std::optional<PoseRecords> LocSrvPose(const UsdEventTable& pose, FlightLog* log) {
   const Lookup found(pose, {"locSrv.x", "locSrv.y", "locSrv.z", "locSrv.qw", "locSrv.qx", "locSrv.qy", "locSrv.qz"});
   if (!found.complete()) {
     log->metadata["mocap"] = "none: event '" + pose.name + "' lacks " + Join(found.missing);
-    return;
+    return std::nullopt;
   }
+  PoseRecords records{&pose, Eigen::MatrixXd(pose.num_records(), 7), "(locSrv.x/y/z, locSrv.q*)"};
+  for (int k = 0; k < 7; ++k)
+    records.values.col(k) = Eigen::Map<const Eigen::VectorXd>(found.columns[k]->data(), pose.num_records());
+  return records;
+}
+
+// The onboard estimator's compressed state in the fixed-frequency block (stateEstimateZ: x/y/z in
+// mm, vx/vy/vz in mm/s, world frame, and the compressed attitude quaternion), for logs without
+// estPose records.
+std::optional<PoseRecords> EstimatorPose(const UsdEventTable& block) {
+  const std::string z = "stateEstimateZ.";
+  const Lookup found(block, {z + "x", z + "y", z + "z", z + "quat", z + "vx", z + "vy", z + "vz"});
+  if (!found.complete()) return std::nullopt;
+  PoseRecords records{&block, Eigen::MatrixXd(block.num_records(), 10),
+                      "(onboard estimate stateEstimateZ.x/y/z, .vx/vy/vz in mm and mm/s, .quat compressed)"};
+  for (int i = 0; i < block.num_records(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      records.values(i, a) = (*found.columns[a])[i] * 1e-3;
+      records.values(i, 7 + a) = (*found.columns[4 + a])[i] * 1e-3;
+    }
+    // The variable is a uint32 (type I); anything else cannot be a packed quaternion: dropped.
+    const double packed = (*found.columns[3])[i];
+    const bool valid = std::isfinite(packed) && packed >= 0.0 && packed <= 4294967295.0;
+    const Eigen::Vector4d q = valid ? DecompressQuaternion(static_cast<uint32_t>(packed))
+                                    : Eigen::Vector4d::Constant(std::numeric_limits<double>::quiet_NaN());
+    records.values.block<1, 4>(i, 3) = q.transpose();
+  }
+  return records;
+}
+
+// A pose on the IMU time base. Leaves `log->mocap` empty (and says why in the metadata) when the
+// records hold no usable pose.
+void AddPose(const PoseRecords& pose, FlightLog* log) {
   // Usable samples: finite, a rotation, strictly later than the previous one. The quaternion
   // keeps one hemisphere so that interpolating its components never passes through zero.
-  const int m = pose.num_records();
+  const UsdEventTable& event = *pose.event;
+  const int m = static_cast<int>(pose.values.rows()), columns = static_cast<int>(pose.values.cols());
   std::vector<double> t;
-  std::vector<double> rows;  // x, y, z, qw, qx, qy, qz per sample
-  t.reserve(m);
-  rows.reserve(static_cast<size_t>(m) * 7);
+  std::vector<double> rows;  // the columns of `pose.values`, the quaternion normalised
   int dropped = 0;
   Eigen::Vector4d previous_q = Eigen::Vector4d::Zero();
   for (int i = 0; i < m; ++i) {
-    double v[7];
-    bool finite = true;
-    for (int k = 0; k < 7; ++k) {
-      v[k] = (*found.columns[k])[i];
-      finite = finite && std::isfinite(v[k]);
-    }
-    Eigen::Vector4d q(v[3], v[4], v[5], v[6]);
-    const double ti = MicrosecondsToSeconds(pose.timestamp_us[i]);
-    if (!finite || !(q.norm() > 0.5 && q.norm() < 2.0) || (!t.empty() && !(ti > t.back()))) {
+    Eigen::VectorXd v = pose.values.row(i).transpose();
+    Eigen::Vector4d q = v.segment<4>(3);
+    const double ti = MicrosecondsToSeconds(event.timestamp_us[i]);
+    if (!v.allFinite() || !(q.norm() > 0.5 && q.norm() < 2.0) || (!t.empty() && !(ti > t.back()))) {
       ++dropped;
       continue;
     }
     q.normalize();
     if (!t.empty() && q.dot(previous_q) < 0.0) q = -q;
     previous_q = q;
+    v.segment<4>(3) = q;
     t.push_back(ti);
-    rows.insert(rows.end(), {v[0], v[1], v[2], q[0], q[1], q[2], q[3]});
+    rows.insert(rows.end(), v.data(), v.data() + columns);
   }
   if (t.size() < 2) {
-    log->metadata["mocap"] = "none: event '" + pose.name + "' has " + std::to_string(t.size()) + " usable samples";
+    log->metadata["mocap"] = "none: event '" + event.name + "' has " + std::to_string(t.size()) + " usable samples";
     return;
   }
   const Eigen::Map<const Eigen::VectorXd> t_pose(t.data(), static_cast<Eigen::Index>(t.size()));
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 7, Eigen::RowMajor>> x_pose(
-      rows.data(), static_cast<Eigen::Index>(t.size()), 7);
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> x_pose(
+      rows.data(), static_cast<Eigen::Index>(t.size()), columns);
   const Eigen::MatrixXd x = InterpolateLinear(t_pose, Eigen::MatrixXd(x_pose), log->t_s);
 
   const int n = log->num_samples();
-  MocapTrack mocap;
+  MocapTrack& mocap = log->mocap.emplace();
   mocap.position_w_m = x.leftCols(3);
+  if (columns == 10) mocap.velocity_w_mps = x.rightCols(3);
   mocap.bryant_rad.resize(n, 3);
   for (int i = 0; i < n; ++i) {
     const Eigen::Quaterniond q(x(i, 3), x(i, 4), x(i, 5), x(i, 6));
@@ -284,13 +340,12 @@ void AddMocap(const UsdEventTable& pose, FlightLog* log) {
   // Continuous roll and yaw: a flip or a full turn must not jump by 2 pi between samples.
   mocap.bryant_rad.col(0) = UnwrapAngle(mocap.bryant_rad.col(0));
   mocap.bryant_rad.col(2) = UnwrapAngle(mocap.bryant_rad.col(2));
-  log->mocap = std::move(mocap);
 
   double max_gap = 0.0;
   for (size_t i = 1; i < t.size(); ++i) max_gap = std::max(max_gap, t[i] - t[i - 1]);
   int held = 0;
   for (int i = 0; i < n; ++i) held += (log->t_s[i] < t.front() || log->t_s[i] > t.back()) ? 1 : 0;
-  log->metadata["mocap"] = "event '" + pose.name + "' (locSrv.x/y/z, locSrv.q*), " + std::to_string(t.size()) +
+  log->metadata["mocap"] = "event '" + event.name + "' " + pose.description + ", " + std::to_string(t.size()) +
                            " samples interpolated onto the IMU times";
   log->metadata["mocap_coverage_s"] = FormatValue("%.6f", t.front()) + " .. " + FormatValue("%.6f", t.back());
   log->metadata["mocap_max_gap_s"] = FormatValue("%.4f", max_gap);
@@ -350,8 +405,11 @@ FlightLog CrazyflieUsdToFlight(const CrazyflieUsdLog& usd, int num_rotors, const
     log.metadata["time_base"] = base.description;
     log.metadata["rotor_event"] = StreamDescription(*block);
   }
-  if (const UsdEventTable* pose = usd.FindEvent(options.pose_event); pose && pose->num_records() > 0) {
-    AddMocap(*pose, &log);
+  const UsdEventTable* pose = usd.FindEvent(options.pose_event);
+  if (pose && pose->num_records() > 0) {
+    if (const std::optional<PoseRecords> records = LocSrvPose(*pose, &log)) AddPose(*records, &log);
+  } else if (const std::optional<PoseRecords> records = EstimatorPose(*block)) {
+    AddPose(*records, &log);
   }
   return log;
 }

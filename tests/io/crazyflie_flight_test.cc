@@ -292,6 +292,35 @@ TEST(CrazyflieFlight, ImuEventsMergeWithTheFixedFrequencyBlock) {
               "'estGyroscope' and 'estAcceleration'");
 }
 
+// Without estPose records the pose comes from the fixed-frequency block's compressed estimator
+// state: mm, mm/s and the firmware's 32-bit quaternion (largest of x, y, z, w in the top 2 bits,
+// then 3 x (sign, 9 bits)). Identity: 3 << 30; yaw +90 deg (z = w = 1/sqrt 2): 2 << 30 | 511.
+TEST(CrazyflieFlight, EstimatorPoseFromTheCompressedState) {
+  LogWriter w;
+  w.Put(static_cast<uint16_t>(1));
+  w.Event(0xFFFF, "fixedFrequency",
+          {"gyro.x(f)", "gyro.y(f)", "gyro.z(f)", "acc.x(f)", "acc.y(f)", "acc.z(f)", "rpm.m1(H)", "rpm.m2(H)",
+           "rpm.m3(H)", "rpm.m4(H)", "stateEstimateZ.x(h)", "stateEstimateZ.y(h)", "stateEstimateZ.z(h)",
+           "stateEstimateZ.vx(h)", "stateEstimateZ.vy(h)", "stateEstimateZ.vz(h)", "stateEstimateZ.quat(I)"});
+  for (int i = 0; i < 40; ++i) {
+    w.Put(static_cast<uint16_t>(0xFFFF)).Put(static_cast<uint64_t>(1000000 + 2000 * i));
+    for (int k = 0; k < 6; ++k) w.Put(k == 5 ? 1.0f : 0.0f);
+    for (int m = 0; m < 4; ++m) w.Put(static_cast<uint16_t>(20000));
+    w.Put(static_cast<int16_t>(10 * i)).Put(static_cast<int16_t>(-500)).Put(static_cast<int16_t>(470));
+    w.Put(static_cast<int16_t>(5000)).Put(static_cast<int16_t>(0)).Put(static_cast<int16_t>(-250));
+    w.Put(static_cast<uint32_t>(i < 20 ? 3u << 30 : (2u << 30) | 511u));
+  }
+  const FlightLog log = FromBytes(w.Finish());
+  ASSERT_TRUE(log.mocap.has_value());
+  ASSERT_TRUE(log.mocap->velocity_w_mps.has_value());
+  EXPECT_TRUE(log.mocap->position_w_m.row(3).isApprox(Eigen::RowVector3d(0.03, -0.5, 0.47), 1e-12));
+  EXPECT_TRUE(log.mocap->velocity_w_mps->row(3).isApprox(Eigen::RowVector3d(5.0, 0.0, -0.25), 1e-12));
+  EXPECT_NEAR(log.mocap->bryant_rad(10, 2), 0.0, 1e-9);
+  EXPECT_NEAR(log.mocap->bryant_rad(30, 2), kPi / 2, 1e-9);
+  EXPECT_NEAR(log.mocap->bryant_rad(30, 0), 0.0, 1e-9);
+  EXPECT_NE(log.metadata.at("mocap").find("stateEstimateZ"), std::string::npos) << log.metadata.at("mocap");
+}
+
 TEST(CrazyflieFlight, VehicleFilesDescribeTheCrazyflies) {
   const std::string dir = testing::SourceDir() + "/data/vehicles/";
   for (const auto& [file, name, mass] : std::vector<std::tuple<std::string, std::string, double>>{
@@ -613,6 +642,52 @@ TEST(CrazyflieFlight, RotorOrderLagFollowsTheSimulatedMotorLag) {
   EXPECT_NE(swapped.at("message").get<std::string>().find("rotors 1 and 2 appear swapped"), std::string::npos)
       << swapped.at("message");
   std::filesystem::remove_all(dir);
+}
+
+// The estimator pose of the uSD event logs (no estPose records): the attitude rate of the
+// decompressed quaternion against the gyro events, the velocity against the position's slope, and
+// the accelerometer rotated to the world against gravity, on figure8_100hz (12 s, up to 1 m/s).
+TEST(CrazyflieFlightRealData, UsdEventEstimatorPoseAgreesWithTheImu) {
+  const auto path = testing::SharedDataPath("real/crazyflie-imrc-usd-events/raw/figure8_100hz");
+  if (!path) GTEST_SKIP() << "shared IMRC uSD event logs not present";
+  const FlightLog log = LoadCrazyflieFlight(*path, 4);
+  ASSERT_TRUE(log.mocap.has_value());
+  ASSERT_TRUE(log.mocap->velocity_w_mps.has_value());
+  const MocapTrack& m = *log.mocap;
+  const int h = 50;  // +-50 ms for the slope (the block is at 100.9 Hz)
+  Eigen::Vector3d slope_num = Eigen::Vector3d::Zero(), slope_den = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_error = Eigen::Vector3d::Zero(), velocity_power = Eigen::Vector3d::Zero();
+  Eigen::Vector3d specific_force_w = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (int k = h; k + h < log.num_samples(); ++k) {
+    const Eigen::Matrix3d r0 = BryantToRotation(m.bryant_rad.row(k - 10).transpose());
+    const Eigen::Matrix3d r1 = BryantToRotation(m.bryant_rad.row(k + 10).transpose());
+    const Eigen::AngleAxisd step(r0.transpose() * r1);
+    const Eigen::Vector3d w = step.axis() * step.angle() / (log.t_s[k + 10] - log.t_s[k - 10]);
+    const Eigen::Vector3d gyro = log.gyro_radps.middleRows(k - 10, 21).colwise().mean().transpose();
+    slope_num += w.cwiseProduct(gyro);
+    slope_den += gyro.cwiseProduct(gyro);
+    const Eigen::Vector3d slope =
+        (m.position_w_m.row(k + h) - m.position_w_m.row(k - h)).transpose() / (log.t_s[k + h] - log.t_s[k - h]);
+    const Eigen::Vector3d v = m.velocity_w_mps->row(k).transpose();
+    velocity_error += (v - slope).cwiseAbs2();
+    velocity_power += v.cwiseAbs2();
+    specific_force_w += BryantToRotation(m.bryant_rad.row(k).transpose()) * log.acc_mps2.row(k).transpose();
+    ++count;
+  }
+  const Eigen::Vector3d rate_slope = slope_num.cwiseQuotient(slope_den);
+  const Eigen::Vector3d velocity_rms = (velocity_error / count).cwiseSqrt(),
+                        speed_rms = (velocity_power / count).cwiseSqrt();
+  specific_force_w /= count;
+  std::cout << "  figure8_100hz: " << log.metadata.at("mocap") << "\n  attitude rate / gyro " << rate_slope.transpose()
+            << "; velocity RMS " << speed_rms.transpose() << " m/s, error RMS " << velocity_rms.transpose()
+            << "; mean specific force (world) " << specific_force_w.transpose() << "\n";
+  for (int a = 0; a < 2; ++a) {  // roll and pitch (yaw barely moves: no yaw excitation)
+    EXPECT_NEAR(rate_slope[a], 1.0, 0.1) << a;
+    EXPECT_LT(velocity_rms[a], 0.2 * speed_rms[a]) << a;
+  }
+  EXPECT_LT(std::hypot(specific_force_w[0], specific_force_w[1]), 0.3);
+  EXPECT_NEAR(specific_force_w[2], kStandardGravity, 0.3);
 }
 
 }  // namespace

@@ -15,7 +15,10 @@
 //   voltage      pm.vbatMV (mV -> V), else pm.vbat (V)
 //   mocap        estPose: locSrv.x/y/z (m) and locSrv.qx/qy/qz/qw, resampled onto the IMU
 //                times (linear for position, normalised linear for the quaternion), then as
-//                Bryant angles with roll and yaw unwrapped (continuous, may leave [-pi, pi])
+//                Bryant angles with roll and yaw unwrapped (continuous, may leave [-pi, pi]);
+//                without estPose records, the onboard estimate in the fixed-frequency block:
+//                stateEstimateZ.x/y/z (mm), .vx/vy/vz (mm/s, the flight's velocity) and .quat (the
+//                firmware's 32-bit compressed quaternion), resampled the same way
 //
 // Rotor columns follow the firmware's motor order M1..M4; the vehicle file lists its rotors in
 // that order (data/vehicles/crazyflie21_*.yaml).
