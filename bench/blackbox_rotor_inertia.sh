@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The rotor-acceleration term of the TU Delft 3-inch quad (docs/blackbox.md 6): `rotorid refine
 # --effects rotor_inertia` on each log's kept segment (--segment auto), printed in the paper's
-# normalised form (B2 = J/I_zz, kd/I_zz, kt*d/I per axis) with the held-out relative errors on
-# LOG00230; the same with a 4x placeholder mass; with the refined delay, and as a cross-check the
+# normalised form (B2 = J/I_zz, kd/I_zz, kt*y/I_xx and kt*x/I_yy) with the held-out relative errors
+# on LOG00230; the same with a 4x mass; with the refined delay, and as a cross-check the
 # rotor speed shifted before processing (Omega and Omega' together, as the refined delay moves
 # them); and the diagnosis of LOG00271 with LOG00230 held out.
 #
@@ -16,19 +16,19 @@ D=../shared/data/real/indiflight-tudelft-throw/raw
 V=data/vehicles/tudelft_indiflight_3inch.yaml
 COMMON=(--cutoff-hz 30 --all-parameters --allow-partial)
 mkdir -p "$OUT"
-sed 's/^mass: 0.3$/mass: 1.2/' "$V" >"$OUT/heavy.yaml"
+sed 's/^mass: 0.428$/mass: 1.712/' "$V" >"$OUT/heavy.yaml"
 
 summary() {  # summary LABEL REPORT
   /usr/bin/python3 - "$@" <<'PY'
 import json, sys
 label, path = sys.argv[1:]
 r = json.load(open(path))
-arm = 0.046  # the vehicle file's placeholder hub offset in x and y
+arm_x, arm_y = 0.0455, 0.0635  # the vehicle file's hub offsets (pitch and roll arms)
 def line(stage):
     s = r[stage]; p = {k: v["value"] for k, v in s["parameters"].items()}
     izz = p["tudelft3.I_zz"]
     out = \
-          f"p {p['kt'] * arm / p['tudelft3.I_xx'] * 1e6:5.1f} q {p['kt'] * arm / p['tudelft3.I_yy'] * 1e6:5.1f} " \
+          f"p {p['kt'] * arm_y / p['tudelft3.I_xx'] * 1e6:5.1f} q {p['kt'] * arm_x / p['tudelft3.I_yy'] * 1e6:5.1f} " \
           f"kd/Izz {p['kd'] / izz * 1e6:5.2f} (1e-6)"
     j = s.get("effects", {}).get("rotor_inertia_kgm2", {})
     if j.get("enabled"):
@@ -55,7 +55,7 @@ for L in 271 281 230; do
 done
 "$R" refine --vehicle "$OUT/heavy.yaml" --log "$D/LOG00271.BFL" "${COMMON[@]}" --effects rotor_inertia \
   --json "$OUT/ri_271_heavy.json" -q 2>/dev/null
-summary "LOG00271, mass 1.2 kg" "$OUT/ri_271_heavy.json"
+summary "LOG00271, mass 1.712 kg" "$OUT/ri_271_heavy.json"
 
 echo "== with the refinement's delay (moves Omega and Omega')"
 for L in 271 281; do

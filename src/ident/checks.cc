@@ -70,28 +70,50 @@ struct FlightMetrics {
   double arm_m = 0.0;                     // mean rotor distance from the z axis
   bool rotor_is_speed = true;             // a speed (measured, or a command through the vehicle's map)
   bool rotor_is_measured_speed = true;
-  // Least-squares angular acceleration per unit Omega_i^2 variation (3 x rotors).
+  // Least-squares angular acceleration per unit Omega_i^2 variation (3 x rotors), with the rotor
+  // signal shifted by rotor_lag_s.
   Eigen::MatrixXd moment_pattern;
+  double rotor_lag_s = 0.0;
 };
 
-FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
+// The rotor-moment pattern: centred regression of the angular acceleration on each rotor's
+// Omega^2 taken `lag` samples earlier (the intercept takes gyroscopic and first-moment terms that do
+// not vary with a single rotor; a tiny ridge keeps it defined when a rotor never varies). Returns the
+// share of the angular acceleration's variance it explains.
+double FitMomentPattern(const ProcessedFlight& f, int lag, Eigen::MatrixXd* pattern) {
+  const int rotors = f.vehicle.num_rotors();
+  std::vector<int> rows;
+  for (int i : f.row_samples)
+    if (i >= lag) rows.push_back(i);
+  Eigen::MatrixXd x(rows.size(), rotors), y(rows.size(), 3);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    x.row(r) = f.rotor.row(rows[r] - lag).array().square().matrix();
+    y.row(r) = f.angular_acceleration.row(rows[r]);
+  }
+  x.rowwise() -= x.colwise().mean();
+  y.rowwise() -= y.colwise().mean();
+  Eigen::MatrixXd normal = x.transpose() * x;
+  normal.diagonal().array() += 1e-12 * std::max(normal.diagonal().maxCoeff(), 1e-300);
+  *pattern = normal.ldlt().solve(x.transpose() * y).transpose();
+  const double total = y.squaredNorm();
+  return total > 0.0 ? 1.0 - (y - x * pattern->transpose()).squaredNorm() / total : 0.0;
+}
+
+FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f, const InputCheckThresholds& t) {
   FlightMetrics m;
   m.gravity = f.gravity_mps2;
   m.rotor_is_speed = !RotorSignalIsCommand(raw.log);
   m.rotor_is_measured_speed = m.rotor_is_speed && !raw.log.metadata.count("command_to_speed");
-  const int rows = f.num_rows_samples(), rotors = f.vehicle.num_rotors();
+  const int rows = f.num_rows_samples();
   std::vector<double> acc(rows), gyro(rows);
   Eigen::VectorXd thrust(rows), force_z(rows);
-  Eigen::MatrixXd x(rows, rotors), y(rows, 3);
   for (int r = 0; r < rows; ++r) {
     const int i = f.row_samples[r];
     acc[r] = f.specific_force.row(i).norm();
     gyro[r] = f.angular_velocity.row(i).norm();
     m.angular_velocity_rms += gyro[r] * gyro[r];
-    x.row(r) = f.rotor.row(i).array().square().matrix();
-    thrust[r] = x.row(r).sum();
+    thrust[r] = f.rotor.row(i).squaredNorm();
     force_z[r] = f.specific_force(i, 2);
-    y.row(r) = f.angular_acceleration.row(i);
   }
   m.acc_median = Median(acc);
   m.gyro_median = Median(gyro);
@@ -101,13 +123,17 @@ FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
     m.thrust_variation_pct = 100.0 * std::sqrt((thrust.array() - m.thrust_mean).square().mean()) / m.thrust_mean;
   m.thrust_force_correlation = Correlation(thrust, force_z);
   m.arm_m = f.vehicle.MeanArm();
-  // Centred regression (the intercept takes gyroscopic and first-moment terms that do not vary
-  // with a single rotor); a tiny ridge keeps it defined when a rotor never varies.
-  x.rowwise() -= x.colwise().mean();
-  y.rowwise() -= y.colwise().mean();
-  Eigen::MatrixXd normal = x.transpose() * x;
-  normal.diagonal().array() += 1e-12 * std::max(normal.diagonal().maxCoeff(), 1e-300);
-  m.moment_pattern = normal.ldlt().solve(x.transpose() * y).transpose();
+  // The lag is chosen by how much of the angular acceleration the rotors explain, which does not
+  // depend on the vehicle file, so a swapped order still shows as a swap. Steps of about 5 ms.
+  const double max_lag_s = m.rotor_is_measured_speed ? t.max_speed_lag_s : t.max_command_lag_s;
+  const int max_lag = f.dt_s > 0.0 ? static_cast<int>(std::floor(max_lag_s / f.dt_s)) : 0;
+  const int step = std::max(1, static_cast<int>(std::lround(0.005 / std::max(f.dt_s, 1e-9))));
+  double best = -1.0;
+  for (int lag = 0; lag <= max_lag; lag += step) {
+    Eigen::MatrixXd pattern;
+    const double explained = FitMomentPattern(f, lag, &pattern);
+    if (explained > best) best = explained, m.moment_pattern = pattern, m.rotor_lag_s = lag * f.dt_s;
+  }
   return m;
 }
 
@@ -230,8 +256,12 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
   std::iota(order.begin(), order.end(), 0);
   const Eigen::MatrixXd predicted = PredictedPattern(v, order);
   const Eigen::Vector3d c = PatternCorrelation(m.moment_pattern, predicted);
-  const std::string measured = "correlation of the rotor moments with " + VehicleFile(v) + ": roll " +
-                               ShortNumber(c[0]) + ", pitch " + ShortNumber(c[1]) + ", yaw " + ShortNumber(c[2]);
+  const std::string measured =
+      "correlation of the rotor moments with " + VehicleFile(v) + ": roll " + ShortNumber(c[0]) + ", pitch " +
+      ShortNumber(c[1]) + ", yaw " + ShortNumber(c[2]) +
+      (m.rotor_lag_s > 0.0 ? ", with the rotor signal " + FormatValue("%.0f ms", m.rotor_lag_s * 1e3) +
+                                 " earlier (the lag that explains the rotation best)"
+                           : "");
   std::vector<Check> checks;
   const double ok = t.pattern_correlation_ok;
   if (std::min(c[0], c[1]) >= ok) {
@@ -299,7 +329,7 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
   if (raw.size() != processed.size()) throw Error("CheckFlights: raw and processed flights differ in number");
   std::vector<Check> checks;
   for (size_t k = 0; k < raw.size(); ++k) {
-    const FlightMetrics m = Measure(raw[k], processed[k]);
+    const FlightMetrics m = Measure(raw[k], processed[k], thresholds);
     const std::string& source = raw[k].log.source;
     const Check acc = AccelerometerCheck(m, source, thresholds), motion = MotionCheck(m, source, thresholds);
     checks.push_back(acc);

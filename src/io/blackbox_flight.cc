@@ -1,12 +1,18 @@
 #include "rotorid/io/blackbox_flight.h"
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <numeric>
 #include <vector>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
+#include "rotorid/model/rotation.h"
+#include "rotorid/signal/resample.h"
 
 namespace rotorid {
 namespace internal {
@@ -113,6 +119,128 @@ double VoltsPerCount(const BlackboxLog& log) {
   return 0.0;
 }
 
+// Motion capture uplinked to the flight controller and its onboard attitude (Indiflight):
+// extPos[0..2] (mm), extVel[0..2] (cm/s), extAtt[0..2] (mrad roll, pitch, yaw), all NED with an
+// FRD body, refreshed only when a new mocap sample arrives (24 Hz on the TU Delft logs), and
+// quat[0..3] (w, x, y, z of FRD body -> NED, every frame). Converted to INTERFACE.md 1: world
+// (x, -y, -z) (north, west, up), body FLU: R_flu = F R_frd F with F = diag(1, -1, -1).
+struct MocapColumns {
+  std::vector<int> position, velocity, euler, quaternion;
+};
+
+const Eigen::Matrix3d kFrdToFlu = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+
+// The kept frames at which the uplinked mocap changes (a new sample): the first frame, then every
+// frame where any of extPos, extVel, extAtt differs from the frame before.
+std::vector<int> MocapUpdateRows(const BlackboxFrames& frames, const std::vector<int>& kept, const MocapColumns& c) {
+  std::vector<int> fields = c.position;
+  fields.insert(fields.end(), c.velocity.begin(), c.velocity.end());
+  fields.insert(fields.end(), c.euler.begin(), c.euler.end());
+  std::vector<int> rows = {0};
+  for (int r = 1; r < static_cast<int>(kept.size()); ++r)
+    for (int f : fields)
+      if (frames.at(kept[r], f) != frames.at(kept[r - 1], f)) {
+        rows.push_back(r);
+        break;
+      }
+  return rows;
+}
+
+// A NED vector field (x, y, z columns) in `unit` per metre, at the given rows, as z-up world values.
+Eigen::MatrixXd NedToWorld(const BlackboxFrames& frames, const std::vector<int>& kept, const std::vector<int>& rows,
+                           const std::vector<int>& columns, double counts_per_unit) {
+  Eigen::MatrixXd out(rows.size(), 3);
+  for (size_t k = 0; k < rows.size(); ++k)
+    for (int a = 0; a < 3; ++a)
+      out(k, a) = (a == 0 ? 1.0 : -1.0) * static_cast<double>(frames.at(kept[rows[k]], columns[a])) / counts_per_unit;
+  return out;
+}
+
+// FLU body -> z-up world rotation at the given kept rows: from quat when logged, else extAtt.
+std::vector<Eigen::Matrix3d> Attitudes(const BlackboxFrames& frames, const std::vector<int>& kept,
+                                       const std::vector<int>& rows, const MocapColumns& c) {
+  std::vector<Eigen::Matrix3d> r(rows.size());
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const auto v = [&](const std::vector<int>& columns, int i) {
+      return static_cast<double>(frames.at(kept[rows[k]], columns[i]));
+    };
+    const Eigen::Matrix3d r_ned_frd =
+        c.quaternion.empty()
+            ? BryantToRotation(Eigen::Vector3d(v(c.euler, 0), v(c.euler, 1), v(c.euler, 2)) * 1e-3)
+            : Eigen::Quaterniond(v(c.quaternion, 0), v(c.quaternion, 1), v(c.quaternion, 2), v(c.quaternion, 3))
+                  .normalized()
+                  .toRotationMatrix();
+    r[k] = kFrdToFlu * r_ned_frd * kFrdToFlu;
+  }
+  return r;
+}
+
+// Median angle (deg) between the onboard attitude and extAtt at the mocap updates.
+double MedianAttitudeOffsetDeg(const BlackboxFrames& frames, const std::vector<int>& kept, const std::vector<int>& rows,
+                               const MocapColumns& c, const std::vector<Eigen::Matrix3d>& attitude) {
+  std::vector<double> angles;
+  for (int r : rows) {
+    Eigen::Vector3d euler;
+    for (int a = 0; a < 3; ++a) euler[a] = static_cast<double>(frames.at(kept[r], c.euler[a])) * 1e-3;
+    const Eigen::Matrix3d ext = kFrdToFlu * BryantToRotation(euler) * kFrdToFlu;
+    angles.push_back(Eigen::AngleAxisd(attitude[r].transpose() * ext).angle() * kRadToDeg);
+  }
+  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+  return angles[angles.size() / 2];
+}
+
+void AddMotionCapture(const BlackboxFrames& frames, const std::vector<int>& kept, FlightLog* flight) {
+  MocapColumns c{Columns(frames, "extPos", 3), Columns(frames, "extVel", 3), Columns(frames, "extAtt", 3),
+                 Columns(frames, "quat", 4)};
+  if (c.position.empty() || (c.quaternion.empty() && c.euler.empty())) {
+    flight->metadata["blackbox_pose"] = "none (no extPos[0..2] with quat[0..3] or extAtt[0..2])";
+    return;
+  }
+  const std::vector<int> rows = MocapUpdateRows(frames, kept, c);
+  if (rows.size() < 2) {
+    flight->metadata["blackbox_pose"] = "none (extPos, extVel and extAtt never change: no mocap uplinked)";
+    return;
+  }
+  Eigen::VectorXd t_update(rows.size());
+  for (size_t k = 0; k < rows.size(); ++k) t_update[k] = flight->t_s[rows[k]];
+  MocapTrack mocap;
+  mocap.position_w_m = InterpolateLinear(t_update, NedToWorld(frames, kept, rows, c.position, 1000.0), flight->t_s);
+  if (!c.velocity.empty())
+    mocap.velocity_w_mps = InterpolateLinear(t_update, NedToWorld(frames, kept, rows, c.velocity, 100.0), flight->t_s);
+  // The onboard attitude is logged every frame; extAtt only at the mocap samples.
+  const bool onboard = !c.quaternion.empty();
+  std::vector<int> every_row(kept.size());
+  std::iota(every_row.begin(), every_row.end(), 0);
+  const std::vector<int>& attitude_rows = onboard ? every_row : rows;
+  const std::vector<Eigen::Matrix3d> attitude = Attitudes(frames, kept, attitude_rows, c);
+  Eigen::MatrixXd bryant(attitude.size(), 3);
+  for (size_t k = 0; k < attitude.size(); ++k) bryant.row(k) = RotationToBryant(attitude[k]).transpose();
+  bryant.col(0) = UnwrapAngle(bryant.col(0));
+  bryant.col(2) = UnwrapAngle(bryant.col(2));
+  mocap.bryant_rad = onboard ? bryant : InterpolateLinear(t_update, bryant, flight->t_s);
+  flight->mocap = std::move(mocap);
+
+  // The mocap's rate: the median interval between samples (some are dropped on the radio link).
+  std::vector<double> intervals(rows.size() - 1);
+  for (size_t k = 1; k < rows.size(); ++k) intervals[k - 1] = t_update[k] - t_update[k - 1];
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  const double rate_hz = 1.0 / intervals[intervals.size() / 2];
+  std::string pose = "extPos[0..2] (mm, NED -> z up)" +
+                     std::string(c.velocity.empty() ? "" : ", extVel[0..2] (cm/s, NED -> z up)") + ": " +
+                     std::to_string(rows.size()) + " mocap samples (" + FormatValue("%.1f Hz", rate_hz) +
+                     ") interpolated linearly between the frames where they change; attitude ";
+  if (!onboard) {
+    pose += "extAtt[0..2] (mrad roll, pitch, yaw, FRD -> FLU), interpolated the same way";
+  } else {
+    pose += "quat[0..3] (onboard estimate of every frame, FRD -> FLU)";
+    if (!c.euler.empty())
+      pose += "; extAtt differs from it by " +
+              FormatValue("%.1f deg", MedianAttitudeOffsetDeg(frames, kept, rows, c, attitude)) + " (median)";
+  }
+  flight->metadata["blackbox_pose"] = pose;
+  flight->metadata["blackbox_mocap_rate_hz"] = FormatValue("%.2f", rate_hz);
+}
+
 }  // namespace
 }  // namespace internal
 
@@ -185,6 +313,7 @@ FlightLog BlackboxToFlight(const BlackboxLog& log, const std::string& source, in
     }
     if (flight.voltage_v) (*flight.voltage_v)[r] = static_cast<double>(frames.at(k, vbat)) * volts;
   }
+  internal::AddMotionCapture(frames, kept, &flight);
   auto& meta = flight.metadata;
   meta["format"] = "blackbox";
   meta["blackbox_log"] = log.Summary();

@@ -127,7 +127,11 @@ SegmentationOptions ThrownQuadSegmentationOptions() {
 }
 
 Segmentation SegmentThrownFlight(const FlightLog& log, const SegmentationOptions& options) {
-  Segmentation segmentation = SegmentFlight(log, options);
+  // Without the pose: a hand-launched vehicle rests in a hand or on a table, so "near the resting
+  // height" is no ground (LOG00230 hovers at its hand's height for its last 4 s).
+  FlightLog without_pose = log;
+  without_pose.mocap.reset();
+  Segmentation segmentation = SegmentFlight(without_pose, options);
   std::vector<FlightPhaseSpan> stopped;
   for (const FlightPhaseSpan& s : FlightPhases(log, {}, options))
     if (s.phase == FlightPhase::kMotorsStopped) stopped.push_back(s);

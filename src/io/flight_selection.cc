@@ -47,12 +47,14 @@ void DescribeSources(const FlightLog& log, const std::string& format, FlightInpu
     add("voltage", Meta(log, "px4_battery"));
   } else if (format == "crazyflie_usd") {
     add("imu", Meta(log, "imu_event"));
+    add("time base", Meta(log, "time_base"));
     s->rotor_signal_source = Meta(log, "rotor_signal_source");
     add("pose", Meta(log, "mocap"));
     add("voltage", Meta(log, "voltage_source"));
   } else if (format == "blackbox") {
     add("imu", Meta(log, "blackbox_gyro") + "; " + Meta(log, "blackbox_acc"));
     s->rotor_signal_source = Meta(log, "blackbox_rotor");
+    if (log.mocap) add("pose", Meta(log, "blackbox_pose"));
     if (log.voltage_v) add("voltage", Meta(log, "blackbox_voltage"));
   } else {
     if (format != "csv") add("column map", Meta(log, "column_map"));

@@ -2,9 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -12,6 +15,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/io/blackbox_segments.h"
 #include "rotorid/io/flight_source.h"
+#include "rotorid/model/rotation.h"
 #include "rotorid/refine/motor_response.h"
 #include "support/test_support.h"
 
@@ -84,6 +88,59 @@ TEST(BlackboxFlight, UnitsFromTheHeader) {
     EXPECT_NE(std::string(e.what()).find("no motor[0..5] fields for 6 rotors (the log has 4)"), std::string::npos)
         << e.what();
   }
+}
+
+// Indiflight's uplinked mocap (NED, FRD body) and onboard quaternion into INTERFACE.md 1's
+// frames: world (x, -y, -z), body FLU; the mocap fields refresh only when a new sample arrives,
+// and are interpolated between the frames where they change.
+TEST(BlackboxFlight, MotionCaptureFromNedAndFrd) {
+  std::vector<std::string> names = {"time",         "gyroADC[0]",   "gyroADC[1]", "gyroADC[2]", "accSmooth[0]",
+                                    "accSmooth[1]", "accSmooth[2]", "omega[0]",   "omega[1]",   "omega[2]",
+                                    "omega[3]",     "extPos[0]",    "extPos[1]",  "extPos[2]",  "extVel[0]",
+                                    "extVel[1]",    "extVel[2]",    "extAtt[0]",  "extAtt[1]",  "extAtt[2]",
+                                    "quat[0]",      "quat[1]",      "quat[2]",    "quat[3]"};
+  // FRD body -> NED: yaw 30 deg (nose toward east of north), then pitch 10 deg nose up, roll 20 deg
+  // right side down; the quaternion scaled as logged (x 8127, sign flipped: the same rotation).
+  const Eigen::Vector3d euler_ned(20.0 * kDegToRad, 10.0 * kDegToRad, 30.0 * kDegToRad);
+  const Eigen::Quaterniond q_ned(BryantToRotation(euler_ned));
+  const auto counts = [](double v) { return static_cast<std::int64_t>(std::lround(v)); };
+  std::vector<std::vector<std::int64_t>> rows;
+  for (int k = 0; k < 9; ++k) {
+    const int sample = k / 4;  // a new mocap sample at frames 0, 4 and 8
+    std::vector<std::int64_t> row = {1000 + 2000 * k, 0, 0, 0, 0, 0, 2048, 100, 100, 100, 100};
+    // NED position north 1 m, east 2 m + 0.4 m per sample, 3 m up; velocity (1, -2, 0.5) m/s.
+    row.insert(row.end(), {1000, 2000 + 400 * sample, -3000, 100, -200, 50});
+    row.insert(row.end(), {counts(euler_ned[0] * 1e3), counts(euler_ned[1] * 1e3), counts(euler_ned[2] * 1e3)});
+    row.insert(row.end(), {counts(-8127 * q_ned.w()), counts(-8127 * q_ned.x()), counts(-8127 * q_ned.y()),
+                           counts(-8127 * q_ned.z())});
+    rows.push_back(row);
+  }
+  const std::map<std::string, std::string> header = {{"acc_1G", "2048"}, {"blackbox_high_resolution", "1"}};
+  const FlightLog flight = BlackboxToFlight(MakeLog(names, rows, header), "mem", 4);
+  ASSERT_TRUE(flight.mocap.has_value());
+  const MocapTrack& m = *flight.mocap;
+  EXPECT_TRUE(m.position_w_m.row(0).isApprox(Eigen::RowVector3d(1.0, -2.0, 3.0), 1e-12));
+  EXPECT_NEAR(m.position_w_m(2, 1), -2.2, 1e-12);  // halfway between the samples at frames 0 and 4
+  EXPECT_NEAR(m.position_w_m(8, 1), -2.8, 1e-12);
+  ASSERT_TRUE(m.velocity_w_mps.has_value());
+  EXPECT_TRUE(m.velocity_w_mps->row(5).isApprox(Eigen::RowVector3d(1.0, 2.0, -0.5), 1e-12));
+  // FLU body in the z-up world: roll unchanged, pitch and yaw negated (quaternion scaling < 1e-4 rad).
+  for (int k = 0; k < 9; ++k) {
+    EXPECT_NEAR(m.bryant_rad(k, 0), euler_ned[0], 2e-4);
+    EXPECT_NEAR(m.bryant_rad(k, 1), -euler_ned[1], 2e-4);
+    EXPECT_NEAR(m.bryant_rad(k, 2), -euler_ned[2], 2e-4);
+  }
+  EXPECT_NE(flight.metadata.at("blackbox_pose").find("3 mocap samples"), std::string::npos)
+      << flight.metadata.at("blackbox_pose");
+  EXPECT_NE(flight.metadata.at("blackbox_pose").find("extAtt differs from it by 0.0 deg"), std::string::npos);
+
+  // Without the quaternion, the attitude is extAtt's, interpolated like the position.
+  for (int i = 0; i < 4; ++i) names.pop_back();
+  for (auto& row : rows) row.resize(names.size());
+  const FlightLog ext = BlackboxToFlight(MakeLog(names, rows, header), "mem", 4);
+  ASSERT_TRUE(ext.mocap.has_value());
+  EXPECT_NEAR(ext.mocap->bryant_rad(6, 2), -euler_ned[2], 1e-3);
+  EXPECT_NE(ext.metadata.at("blackbox_pose").find("attitude extAtt[0..2]"), std::string::npos);
 }
 
 TEST(BlackboxVehicle, QuadXInBetaflightOrderOrAClearRequestForGeometry) {
@@ -170,6 +227,71 @@ TEST(BlackboxFlightReal, GeckoIsACommandLogWithBatteryVoltage) {
   EXPECT_THROW(LoadFlightLog(*path, Quad(), rpm), Error);
 }
 
+// The TU Delft logs' motion capture against the IMU (the airborne kept stretch of LOG00281, 42 s):
+// the uplinked velocity against the differentiated uplinked position, the attitude (onboard
+// quat) against the integrated gyro, and the accelerometer rotated to the world against gravity.
+TEST(BlackboxFlightReal, IndiflightMotionCaptureAgreesWithTheImu) {
+  const auto path = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00281.BFL");
+  if (!path) GTEST_SKIP() << "TU Delft logs absent";
+  const FlightLog log = LoadBlackboxFlight(*path, 4);
+  ASSERT_TRUE(log.mocap.has_value());
+  ASSERT_TRUE(log.mocap->velocity_w_mps.has_value());
+  EXPECT_NEAR(std::stod(log.metadata.at("blackbox_mocap_rate_hz")), 24.0, 0.5);  // median interval 41.6 ms
+  const SampleRange kept = SegmentThrownFlight(log).kept.at(0);
+  const MocapTrack& m = *log.mocap;
+  const Eigen::MatrixX3d& v = *m.velocity_w_mps;
+  // Central difference over +-21 frames (one mocap period each side).
+  const int h = 21;
+  std::vector<double> diff[3], vel[3], w_attitude[3], w_gyro[3];
+  Eigen::Vector3d specific_force_w = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (int k = kept.begin + h; k < kept.end - h; ++k) {
+    for (int a = 0; a < 3; ++a) {
+      diff[a].push_back((m.position_w_m(k + h, a) - m.position_w_m(k - h, a)) / (log.t_s[k + h] - log.t_s[k - h]));
+      vel[a].push_back(v(k, a));
+    }
+    const Eigen::Matrix3d r0 = BryantToRotation(m.bryant_rad.row(k - 1).transpose());
+    const Eigen::Matrix3d r1 = BryantToRotation(m.bryant_rad.row(k + 1).transpose());
+    const Eigen::AngleAxisd step(r0.transpose() * r1);
+    const Eigen::Vector3d w = step.axis() * step.angle() / (log.t_s[k + 1] - log.t_s[k - 1]);
+    for (int a = 0; a < 3; ++a) {
+      w_attitude[a].push_back(w[a]);
+      w_gyro[a].push_back(log.gyro_radps(k, a));
+    }
+    specific_force_w += BryantToRotation(m.bryant_rad.row(k).transpose()) * log.acc_mps2.row(k).transpose();
+    ++count;
+  }
+  specific_force_w /= count;
+  const double span = log.t_s[kept.end - h - 1] - log.t_s[kept.begin + h];
+  const Eigen::Vector3d mean_acceleration =
+      (v.row(kept.end - h - 1) - v.row(kept.begin + h)).transpose() / span;  // about 0 over 40 s
+  std::cout << "LOG00281 (" << count << " frames): " << log.metadata.at("blackbox_pose") << "\n";
+  for (int a = 0; a < 3; ++a) {
+    double slope_num = 0, slope_den = 0, rms = 0;
+    for (size_t i = 0; i < w_gyro[a].size(); ++i) {
+      slope_num += w_attitude[a][i] * w_gyro[a][i];
+      slope_den += w_gyro[a][i] * w_gyro[a][i];
+    }
+    for (size_t i = 0; i < vel[a].size(); ++i) rms += (vel[a][i] - diff[a][i]) * (vel[a][i] - diff[a][i]);
+    rms = std::sqrt(rms / vel[a].size());
+    const double slope = slope_num / slope_den;
+    std::cout << "  axis " << a << ": velocity vs d(position)/dt corr " << Correlation(vel[a], diff[a]) << ", RMS "
+              << rms << " m/s; attitude rate vs gyro corr " << Correlation(w_attitude[a], w_gyro[a]) << ", slope "
+              << slope << "; mean specific force (world) " << specific_force_w[a] << " m/s^2, mean acceleration "
+              << mean_acceleration[a] << "\n";
+    // The uplinked velocity is noisier than the position's slope (0.93-0.96, 0.21-0.38 m/s measured).
+    EXPECT_GT(Correlation(vel[a], diff[a]), 0.9);
+    EXPECT_LT(rms, 0.45);
+    EXPECT_GT(Correlation(w_attitude[a], w_gyro[a]), 0.99);
+    EXPECT_NEAR(slope, 1.0, 0.02);
+  }
+  // Sustained flight: the world-frame specific force is gravity plus the (near zero) mean acceleration.
+  EXPECT_LT(std::hypot(specific_force_w[0], specific_force_w[1]), 0.3);
+  EXPECT_NEAR(specific_force_w[2] - mean_acceleration[2], kStandardGravity, 0.3);
+  // extAtt is the mocap's own body frame, rolled about 6 deg from the IMU's (docs/blackbox.md 2).
+  EXPECT_NE(log.metadata.at("blackbox_pose").find("extAtt differs from it by"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace rotorid
 
@@ -252,7 +374,7 @@ TEST(BlackboxCli, IdentifyReadsTheTuDelftLogDirectly) {
       << run.err;
   const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/id.json"));
   const double kt = report.at("linear").at("parameters").at("kt").at("value").get<double>();
-  EXPECT_NEAR(kt / 0.3, 0.621e-6, 0.05e-6);  // the vehicle file's placeholder mass: 0.3 kg
+  EXPECT_NEAR(kt / 0.428, 0.621e-6, 0.05e-6);  // the vehicle's 0.428 kg
 }
 
 // The rotor-acceleration term of the TU Delft quad (docs/blackbox.md 6): `rotorid refine --effects
@@ -267,9 +389,9 @@ TEST(BlackboxCli, RotorAccelerationTermMatchesThePaper) {
   const std::string dir = testing::MakeTempDir("blackbox_rotor_inertia");
   const std::string vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
   std::string heavy_text = testing::Slurp(vehicle);
-  const size_t mass_at = heavy_text.find("\nmass: 0.3\n");
+  const size_t mass_at = heavy_text.find("\nmass: 0.428\n");
   ASSERT_NE(mass_at, std::string::npos);
-  heavy_text.replace(mass_at, 11, "\nmass: 1.2\n");
+  heavy_text.replace(mass_at, 13, "\nmass: 1.712\n");
   const std::string heavy = dir + "/heavy.yaml";
   std::ofstream(heavy) << heavy_text;
 
@@ -308,6 +430,43 @@ TEST(BlackboxCli, RotorAccelerationTermMatchesThePaper) {
   const double mz_refined = placeholder.report.at("held_out").at("refined").at("relative_error_pct").at("Mz");
   EXPECT_GT(mz_linear, 300.0);
   EXPECT_LT(mz_refined, 0.6 * mz_linear);  // LOG00230 held out: 390 % -> 181 %
+}
+
+// The TU Delft vehicle file with its real mass and rectangle (0.428 kg, rotors at x +-45.5 mm,
+// y +-63.5 mm; SOURCE.md): the rotor-order check passes, and with the uplinked velocity the
+// rotor drag can be refined (it needed velocity). LOG00271 refined with delay, rotor_inertia and
+// rotor_drag, LOG00281 held out: kt against Table I's kt/m = 0.621e-6 times 0.428 kg = 2.66e-7
+// N s^2 (measured 2.70e-7), k_d 1.01e-5 +- 3.2e-6 N s/m per rad/s, held-out Mx/My/Mz 188/84/448 %
+// -> 93/56/47 %.
+TEST(BlackboxCli, RealVehicleFileRefinesRotorDragWithTheUplinkedVelocity) {
+  const auto p271 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00271.BFL");
+  const auto p281 = testing::SharedDataPath("real/indiflight-tudelft-throw/raw/LOG00281.BFL");
+  if (!p271 || !p281) GTEST_SKIP() << "TU Delft logs absent";
+  const std::string dir = testing::MakeTempDir("blackbox_real_vehicle");
+  const std::string vehicle = testing::SourceDir() + "/data/vehicles/tudelft_indiflight_3inch.yaml";
+  const testing::CommandResult run =
+      testing::RunRotorid({"refine", "--vehicle", vehicle, "--log", *p271, "--validate-vehicle", vehicle,
+                           "--validate-log", *p281, "--cutoff-hz", "30", "--all-parameters", "--allow-partial",
+                           "--effects", "delay,rotor_inertia,rotor_drag", "--json", dir + "/refine.json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(testing::Slurp(dir + "/refine.json"));
+  for (const nlohmann::json& check : report.at("checks")) {
+    if (check.at("name") == "rotor_order" || check.at("name") == "rotor_spins") {
+      EXPECT_EQ(check.at("status"), "ok") << check.at("message");
+    }
+  }
+  const nlohmann::json& refined = report.at("refined");
+  EXPECT_NEAR(refined.at("parameters").at("kt").at("value").get<double>() / (0.621e-6 * 0.428), 1.0, 0.05);
+  const nlohmann::json& drag = refined.at("effects").at("rotor_drag_coefficient");
+  ASSERT_TRUE(drag.at("enabled").get<bool>());
+  EXPECT_GT(drag.at("value").get<double>(), 2.0 * drag.at("std").get<double>());
+  EXPECT_FALSE(drag.at("on_bound").get<bool>());
+  const nlohmann::json& before = report.at("held_out").at("linear").at("relative_error_pct");
+  const nlohmann::json& after = report.at("held_out").at("refined").at("relative_error_pct");
+  for (const char* component : {"Fz", "Mx", "My", "Mz"})
+    EXPECT_LT(after.at(component).get<double>(), before.at(component).get<double>()) << component;
+  EXPECT_LT(after.at("Mz").get<double>(), 0.2 * before.at("Mz").get<double>());  // 448 % -> 47 %
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

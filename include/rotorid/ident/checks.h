@@ -49,6 +49,12 @@ struct InputCheckThresholds {
   // A transposition of two rotors is named when it fits with at least this correlation (and by 0.5
   // better than the file's order).
   double swap_correlation = 0.8;
+  // The rotor-moment pattern is measured with the rotor signal shifted by the lag in [0, max] (s)
+  // that best explains the angular acceleration, whatever the rotor order: a motor command leads
+  // the rotor speed by the motor's response (jana01-06 through the PWM map: 41-53 ms), a measured
+  // speed trails little (its filter, telemetry: 6-12 ms). Defaults: 0.15 s and 0.03 s.
+  double max_command_lag_s = 0.15;
+  double max_speed_lag_s = 0.03;
   // Below these the log is motionless: RMS angular velocity (rad/s) and thrust variation (%).
   double motionless_angular_velocity_radps = 0.02;
   double motionless_thrust_variation_pct = 1.0;

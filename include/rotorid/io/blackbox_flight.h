@@ -13,6 +13,11 @@
 //                (motor_pwm_protocol 5..8) u = (m - 48) / (motorOutput[1] - 48), other protocols
 //                u = (m - 1000) / (motorOutput[1] - 1000)
 //   voltage      vbatLatest x 0.01 V (Betaflight >= 4, INAV; older firmware: not mapped)
+//   pose         forks that uplink motion capture (Indiflight): position extPos[0..2] (mm, NED)
+//                and velocity extVel[0..2] (cm/s, NED) as world (x, -y, -z), interpolated
+//                linearly between the frames where they change (a new mocap sample, 24 Hz on the
+//                TU Delft logs); attitude the onboard quat[0..3] (FRD body -> NED, every frame),
+//                else extAtt[0..2] (mrad roll, pitch, yaw), as FLU body -> z-up world
 //
 // Betaflight's gyroADC and accSmooth are already FLU (x forward, y left, z up: roll positive
 // right side down, pitch positive nose down, yaw positive nose left), so only units change.

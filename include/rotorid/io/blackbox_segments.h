@@ -57,7 +57,8 @@ SegmentationOptions ThrownQuadSegmentationOptions();
 
 // SegmentFlight with `options`, then also leaves out every "motors stopped" phase (a vehicle that
 // moves with its motors stopped is carried by hand, about to be thrown) as "on ground" with the
-// detail "motors stopped", dropping kept pieces shorter than options.min_segment_s.
+// detail "motors stopped", dropping kept pieces shorter than options.min_segment_s. The pose's
+// height is not used (the resting height of a thrown vehicle is a hand's, not the floor's).
 Segmentation SegmentThrownFlight(const FlightLog& log,
                                  const SegmentationOptions& options = ThrownQuadSegmentationOptions());
 
