@@ -11,6 +11,7 @@
 #include "diagnosis/linearization.h"
 #include "diagnosis/scale_free.h"
 #include "diagnosis/selection.h"
+#include "diagnosis/unexplained.h"
 #include "diagnosis/verdict_text.h"
 #include "diagnosis/verdicts.h"
 #include "rotorid/core/error.h"
@@ -36,6 +37,8 @@ std::string DiagnosisOptions::Validate() const {
   if (max_effects < 0) return "max_effects must not be negative";
   if (!(screen_fraction >= 0.0 && screen_fraction <= 1.0)) return "screen_fraction must lie in [0, 1]";
   if (!(rival_fraction >= 0.0 && rival_fraction <= 1.0)) return "rival_fraction must lie in [0, 1]";
+  if (!(unexplained_floor_ratio >= 1.0)) return "unexplained_floor_ratio must be at least 1";
+  if (!(unexplained_min_pct >= 0.0)) return "unexplained_min_pct must not be negative";
   if (const std::string problem = delay_search.Validate(); !problem.empty()) return problem;
   if (refine_max_iterations < 1) return "refine_max_iterations must be at least 1";
   if (num_threads < 1) return "num_threads must be at least 1";
@@ -563,6 +566,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.where_component = internal::WhereComponent(diagnosis.baseline);
   diagnosis.where =
       LocateGap(full, final_model.predicted, diagnosis.final_effects, options.candidates, options.location);
+  diagnosis.unexplained = internal::FindUnexplained(diagnosis.final_gap, diagnosis.where, options);
   timer.Mark("where");
 
   diagnosis.refinements = evaluator.refinements();

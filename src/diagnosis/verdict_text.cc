@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "diagnosis/selection.h"
+#include "diagnosis/unexplained.h"
 #include "rotorid/model/parameters.h"
 
 namespace rotorid {
@@ -16,7 +17,8 @@ std::string FormatEffectMagnitude(EffectKind kind, const Eigen::VectorXd& value,
 
 std::string DiagnosisVerdict(const Diagnosis& d) {
   return "held out: " + d.validation + " (" + std::to_string(d.held_out_row_samples) + " row samples)\n" +
-         internal::WhereText(d) + internal::WhichText(d) + internal::HowFarText(d);
+         internal::WhereText(d) + internal::WhichText(d) + internal::HowFarText(d) +
+         internal::UnexplainedText(d.unexplained);
 }
 
 namespace internal {
@@ -214,8 +216,9 @@ std::string WhichText(const Diagnosis& d) {
         unscored += (unscored.empty() ? "" : ", ") + std::string(EffectName(v.kind));
     out << "which: no candidate effect removes significant held-out residual; the model explains these flights "
            "as well as the candidates can"
-        << (unscored.empty() ? std::string()
-                             : " in the components it scores (" + unscored + ": mostly in one it does not score, below)")
+        << (unscored.empty()
+                ? std::string()
+                : " in the components it scores (" + unscored + ": mostly in one it does not score, below)")
         << "\n";
   }
   for (const EffectVerdict& v : d.ranking) {
