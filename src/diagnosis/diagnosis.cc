@@ -21,6 +21,15 @@
 
 namespace rotorid {
 
+std::vector<EffectKind> DiagnosisCandidates() {
+  std::vector<EffectKind> kinds = DefaultCandidates();
+  for (const char* name : {"rotor_thrust_scale", "imu_lever_arm"}) {
+    const EffectKind kind = ParseEffectKind(name);
+    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) kinds.push_back(kind);
+  }
+  return kinds;
+}
+
 std::string DiagnosisOptions::Validate() const {
   if (const std::string problem = identify.Validate(); !problem.empty()) return problem;
   // Its folds and held-out flights would each need a first moment of their own.
@@ -566,7 +575,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.where_component = internal::WhereComponent(diagnosis.baseline);
   diagnosis.where =
       LocateGap(full, final_model.predicted, diagnosis.final_effects, options.candidates, options.location);
-  diagnosis.unexplained = internal::FindUnexplained(diagnosis.final_gap, diagnosis.where, options);
+  diagnosis.unexplained = internal::FindUnexplained(diagnosis.baseline, diagnosis.final_gap, diagnosis.where, options);
   timer.Mark("where");
 
   diagnosis.refinements = evaluator.refinements();

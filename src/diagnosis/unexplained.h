@@ -13,10 +13,10 @@ namespace rotorid::internal {
 // The components of `final_gap` (held out, with the selected effects) at least
 // options.unexplained_floor_ratio times their noise floor with a model error of at least
 // options.unexplained_min_pct, largest model error first; `where` (LocateGap with the final
-// effects) gives each its band and stretch. Components without a noise floor (no rotor term) are
-// not judged.
-std::vector<UnexplainedResidual> FindUnexplained(const HeldOutGap& final_gap, const GapLocation& where,
-                                                 const DiagnosisOptions& options);
+// effects) gives each its band and stretch. Components the baseline does not score (no rotor term
+// in the linear model: Mz with kd discarded) are not judged: their noise floor is no floor.
+std::vector<UnexplainedResidual> FindUnexplained(const HeldOutGap& baseline, const HeldOutGap& final_gap,
+                                                 const GapLocation& where, const DiagnosisOptions& options);
 
 // "a force off the thrust axis that no sensor effect reproduces: ..." for Fx, Fy; the same for Fz
 // and the moments with what can cause them.

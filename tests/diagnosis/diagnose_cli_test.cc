@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "rotorid/diagnosis/diagnosis.h"
 #include "rotorid/model/effects.h"
 #include "support/test_support.h"
 
@@ -54,7 +55,7 @@ TEST(DiagnoseCliTest, WithheldDelayThroughTheCommandLine) {
   const std::string component = report["where"]["component"];
   EXPECT_TRUE(component == "Fz" || component == "Mx" || component == "My") << component;
   ASSERT_TRUE(report["ranking"].is_array());
-  ASSERT_EQ(report["ranking"].size(), DefaultCandidates().size());  // every effect of "all" is ranked
+  ASSERT_EQ(report["ranking"].size(), DiagnosisCandidates().size());  // every effect of "all" is ranked
   for (const nlohmann::json& entry : report["ranking"]) {
     for (const char* key : {"effect", "significant", "shrink_pct", "magnitude"})
       EXPECT_TRUE(entry.contains(key)) << key;

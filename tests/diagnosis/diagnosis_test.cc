@@ -90,7 +90,7 @@ TEST(DiagnosisTest, WithheldDelayIsRankedFirstAndItsSizeRecovered) {
   for (int j : {2, 3, 4}) EXPECT_LT(*d.final_gap.relative_error_pct[j], *d.baseline.relative_error_pct[j]) << j;
   EXPECT_EQ(d.selected.size(), 1u) << DiagnosisVerdict(d);
   // The baseline lies far above the noise floor; the delay explains it, and nothing is left.
-  EXPECT_FALSE(internal::FindUnexplained(d.baseline, d.where, TestOptions()).empty());
+  EXPECT_FALSE(internal::FindUnexplained(d.baseline, d.baseline, d.where, TestOptions()).empty());
   EXPECT_TRUE(d.unexplained.empty()) << DiagnosisVerdict(d);
 }
 
@@ -154,14 +154,15 @@ TEST(DiagnosisTest, EffectOnItsBoundIsImplausibleNotSelected) {
   EXPECT_NE(DiagnosisVerdict(d).find("acc_bias: implausible"), std::string::npos) << DiagnosisVerdict(d);
 }
 
-// Per-rotor thrust scales of a realistic size (a few %) are a candidate like any other: selected, each
-// within the issue's 0.01, their sum pinned at zero.
+// Per-rotor thrust scales of a realistic size (a few %) are a default candidate of the diagnosis
+// (DiagnosisCandidates, issue 41): selected among all of them, each within the issue's 0.01, their sum
+// pinned at zero, and nothing left unexplained.
 TEST(DiagnosisTest, PerRotorThrustScalesOfRealisticSizeAreSelected) {
   const EffectKind scale = ParseEffectKind("rotor_thrust_scale");
   Effects withheld;
   withheld.Set(scale, Eigen::Vector4d(0.03, -0.02, -0.03, 0.02));
-  DiagnosisOptions options = TestOptions();
-  options.candidates = {ParseEffectKind("acc_bias"), scale};
+  const DiagnosisOptions options = TestOptions();
+  ASSERT_NE(std::find(options.candidates.begin(), options.candidates.end(), scale), options.candidates.end());
   const Diagnosis d = Diagnose({SimulatedFlight(30.0, 31, withheld)}, {}, options);
   ASSERT_EQ(d.selected, std::vector<EffectKind>{scale}) << DiagnosisVerdict(d);
   const EffectVerdict& v = VerdictOf(d, scale);
@@ -174,6 +175,7 @@ TEST(DiagnosisTest, PerRotorThrustScalesOfRealisticSizeAreSelected) {
   }
   EXPECT_NEAR(v.value.sum(), 0.0, 1e-3);
   EXPECT_EQ(v.test.added_parameters, 3);  // four scales, their sum pinned
+  EXPECT_TRUE(d.unexplained.empty()) << DiagnosisVerdict(d);
 }
 
 // An effect acting where nothing is scored: a rotor inertia of J = 5e-5 kg m^2 on a 30 s flight of
@@ -423,7 +425,7 @@ TEST(DiagnosisTest, LagTiedWithADelayIsSeparatedAtHalfTheCutoff) {
 TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   const Diagnosis d = Diagnose({SimulatedFlight(45.0, 23, Effects{})}, {}, TestOptions());
   EXPECT_TRUE(d.selected.empty()) << DiagnosisVerdict(d);
-  ASSERT_EQ(d.ranking.size(), DefaultCandidates().size());
+  ASSERT_EQ(d.ranking.size(), DiagnosisCandidates().size());
   for (const EffectVerdict& v : d.ranking) {
     EXPECT_FALSE(v.significant) << EffectName(v.kind);
     // rotor_drag needs the velocity and battery a command log with a voltage, which an IMU-only
@@ -435,9 +437,14 @@ TEST(DiagnosisTest, CleanFlightFlagsNothing) {
     }
     EXPECT_EQ(v.status, "not significant") << EffectName(v.kind);
     EXPECT_EQ(v.unscored, "") << EffectName(v.kind);  // kd identified: every component scored
-    // Absent effects come with the smallest size this flight would reveal.
-    ASSERT_EQ(v.detectable_above.size(), EffectDimension(v.kind));
-    EXPECT_GT(v.detectable_above.minCoeff(), 0.0) << EffectName(v.kind);
+    // Absent effects come with the smallest size this flight would reveal (a held coordinate, the
+    // lever arm's z, has none).
+    ASSERT_EQ(v.detectable_above.size(), v.kind->Dimension(PresetVehicle("B").vehicle));
+    const std::vector<int>& held = v.kind->info().held_coordinates;
+    for (int k = 0; k < v.detectable_above.size(); ++k) {
+      if (std::find(held.begin(), held.end(), k) != held.end()) continue;
+      EXPECT_GT(v.detectable_above[k], 0.0) << EffectName(v.kind) << " " << k;
+    }
   }
   // A gyro bias of realistic size (<= 0.03 rad/s) is below what these equations reveal on 45 s.
   EXPECT_GT(VerdictOf(d, ParseEffectKind("gyro_bias")).detectable_above.maxCoeff(), 0.03);
@@ -452,7 +459,7 @@ TEST(DiagnosisTest, CleanFlightFlagsNothing) {
   EXPECT_TRUE(j["baseline"]["relative_error_pct"]["Fx"].is_null());
   EXPECT_TRUE(j["where"]["component"].is_string());
   EXPECT_TRUE(j["selected"].is_array() && j["selected"].empty());
-  EXPECT_EQ(j["ranking"].size(), DefaultCandidates().size());
+  EXPECT_EQ(j["ranking"].size(), DiagnosisCandidates().size());
   // Nothing left far above the noise floor: the contract's list is there, and empty.
   EXPECT_TRUE(d.unexplained.empty()) << DiagnosisVerdict(d);
   EXPECT_TRUE(j["unexplained"].is_array() && j["unexplained"].empty());

@@ -31,11 +31,17 @@
 
 namespace rotorid {
 
+// The diagnosis' candidates by default (`diagnose --effects all`): DefaultCandidates() and the
+// vehicle's own effects a blind diagnosis must also consider, which `refine --effects all` leaves out
+// (an estimate of theirs is only worth refining where the diagnosis names them): per-rotor thrust
+// scales and the IMU lever arm (x, y; z held). docs/diagnosis.md, "Thrust scales and lever arms".
+std::vector<EffectKind> DiagnosisCandidates();
+
 struct DiagnosisOptions {
   // Signal processing and TLS of the linear model (the baseline).
   IdentifyOptions identify;
   // Effects considered as causes of the gap.
-  std::vector<EffectKind> candidates = DefaultCandidates();
+  std::vector<EffectKind> candidates = DiagnosisCandidates();
   // Time-blocked folds per flight when no held-out flights are given.
   int folds = 4;
   // Rows within this many seconds of a held-out block are left out of its training data, so that
