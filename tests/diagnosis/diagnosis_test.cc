@@ -307,6 +307,23 @@ TEST(DiagnosisTest, LeverArmAbsorbingAnAccBiasIsNotSelected) {
   EXPECT_EQ(v.value[2], 0.0) << "r_z is held";
 }
 
+// A lever arm of (20, 10) mm in x, y is a default candidate (DiagnosisCandidates, issue 41) and, on a
+// paper-like flight with angular acceleration, told apart from a misalignment and an acc bias: named
+// alone, within 2 mm, r_z held. Before, without it among the candidates, a misalignment, an acc delay
+// and an acc bias were selected in its place.
+TEST(DiagnosisTest, LeverArmIsNamedAmongTheDefaultCandidates) {
+  const EffectKind lever_arm = ParseEffectKind("imu_lever_arm");
+  Effects withheld;
+  withheld.Set(lever_arm, Eigen::Vector3d(0.02, 0.01, -0.03));
+  const Diagnosis d = Diagnose({SimulatedFlight(30.0, 24, withheld)}, {}, TestOptions());
+  ASSERT_EQ(d.selected, std::vector<EffectKind>{lever_arm}) << DiagnosisVerdict(d);
+  const EffectVerdict& v = VerdictOf(d, lever_arm);
+  EXPECT_NEAR(v.value[0], 0.02, 2e-3) << DiagnosisVerdict(d);
+  EXPECT_NEAR(v.value[1], 0.01, 2e-3) << DiagnosisVerdict(d);
+  EXPECT_NEAR(v.value[2], 0.0, 1e-6) << "r_z is held";
+  EXPECT_TRUE(d.unexplained.empty()) << DiagnosisVerdict(d);
+}
+
 // On a Crazyflie-like flight (CF preset, 40 s at 500 Hz) whose accelerometer lags by 4 ms and
 // whose IMU sits at O_d, the lever arm's z took the place of the first moment ms_z (CF's centre of
 // mass is 2 mm below O_d): r_z = 2.16 +- 0.11 mm, held-out shrink 3.6 %, selected second. Held at
