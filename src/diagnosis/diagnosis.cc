@@ -568,7 +568,11 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.selected = diagnosis.selected_scale_free;
   diagnosis.selected.insert(diagnosis.selected.end(), backward.kept.begin(), backward.kept.end());
   timer.Mark("scale-free tests");
-  for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options, diagnosis.final_model);
+  for (EffectVerdict& v : verdicts) {
+    v.note = internal::VerdictNote(v, options, diagnosis.final_model);
+    if (const std::string product = internal::DiscardedProductStatement(v, full.solution.discarded); !product.empty())
+      v.note += "; " + product;
+  }
   diagnosis.ranking = internal::Rank(std::move(verdicts), diagnosis.selected, unavailable);
 
   // Where.
