@@ -262,6 +262,12 @@ std::string HowFarText(const Diagnosis& d) {
     }
     out << "  (noise floor ";
     value(d.baseline.noise_floor_pct[c]);
+    // The final model's own floor, where its parameters move it (unexplained[] judges against it).
+    const std::optional<double>&before = d.baseline.noise_floor_pct[c], &after = d.final_gap.noise_floor_pct[c];
+    if (!d.steps.empty() && after && (!before || std::abs(*after - *before) > 0.05 * *before)) {
+      out << "; with the selected effects ";
+      value(after);
+    }
     out << ")\n";
     // Each gap divides by its own model's rotor wrench, which an effect can change (per-rotor thrust
     // scales cancel a static moment that the baseline's first moment balanced: jana01's My read 8.4 ->
