@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
     const SimulationResult flight = Simulate(vehicle.vehicle, vehicle.parameters, sim);
     DiagnosisOptions options;
     options.num_threads = threads;
-    options.candidates = ParseEffectList(candidates);
+    options.candidates = candidates == "all" ? DiagnosisCandidates() : ParseEffectList(candidates);
     const double t0 = Now(), c0 = CpuNow();
     const std::vector<ProcessedFlight> processed =
         ProcessFlights({{flight.vehicle, flight.log, 1.0}}, options.identify.observation);

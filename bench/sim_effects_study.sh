@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 12's recovery study on rotorid's simulator: each effect of real vehicles (INTERFACE.md v2)
 # alone and in pairs, seeds 1-3, on configuration A (200 Hz, pixhawk noise, 60 s) and on the
-# Crazyflie-like preset CF (500 Hz, bmi088 noise, 40 s), each with the flight profile that excites
+# Crazyflie-like preset CF (500 Hz, bmi088 noise, 40 s), and X, a 0.6 kg 5-inch X quad
+# (data/vehicles/betaflight_gecko.yaml, derived parameters, 200 Hz, pixhawk noise, 60 s), each with the flight profile that excites
 # it, motion capture on; refined with `rotorid refine --effects <the effect(s)>`. One line per run:
 # truth -> estimate +- std per coordinate, `ok` when every coordinate is within issue 12's tolerance:
 # lever arm 2 mm or 3 std, acc_delay 1 ms, drag coefficients 10 %, rotor inertia 15 %, thrust
@@ -57,6 +58,9 @@ CASES=(
   "CF|ground_effect,rotor_thrust_scale|ground_effect=1.0 rotor_thrust_scale=0.03,-0.02,-0.03,0.02|--profile takeoff-landing"
   "A|clean||--battery"
   "CF|clean||--battery"
+  "X|rotor_thrust_scale|rotor_thrust_scale=0.03,-0.02,-0.03,0.02|--profile yaw-spin"
+  "X|imu_lever_arm|imu_lever_arm=0.015,-0.01,0.01|--profile yaw-spin"
+  "X|clean||--battery"
 )
 
 check() {  # check LABEL REPORT TRUTH SECONDS
@@ -74,7 +78,9 @@ for c in "${CASES[@]}"; do
     args=()
     for a in $assigns; do args+=(--effect "$a"); done
     # shellcheck disable=SC2086
-    "$R" simulate -q --preset "$vehicle" --mocap --seconds "$seconds" --seed "$seed" "${args[@]}" $simopts \
+    vehicle_args=(--preset "$vehicle")
+    [ "$vehicle" = X ] && vehicle_args=(--vehicle data/vehicles/betaflight_gecko.yaml)
+    "$R" simulate -q "${vehicle_args[@]}" --mocap --seconds "$seconds" --seed "$seed" "${args[@]}" $simopts \
       --out "$base.csv" --truth "$base.truth.json" --vehicle-out "$base.yaml" 2>"$base.simerr" ||
       { echo "$vehicle $effects seed $seed: simulate failed: $(head -c 300 "$base.simerr")"; continue; }
     start=$(date +%s.%N)

@@ -34,7 +34,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
   std::string names;
   for (EffectKind kind : AllEffects()) names += (names.empty() ? "" : ",") + kind->name();
   std::string in_all;
-  for (EffectKind kind : DefaultCandidates()) in_all += (in_all.empty() ? "" : ",") + kind->name();
+  for (EffectKind kind : DiagnosisCandidates()) in_all += (in_all.empty() ? "" : ",") + kind->name();
   command.app
       ->add_option("--effects", options->effects,
                    "candidate effects: all (" + in_all + "), every (all " + std::to_string(AllEffects().size()) +
@@ -56,7 +56,7 @@ Command AddDiagnoseCommand(CLI::App& root) {
   command.run = [options, app = command.app]() {
     DiagnosisOptions diagnosis = options->diagnosis;
     diagnosis.identify = ResolveIdentifyOptions(&options->identify);
-    diagnosis.candidates = ParseEffectList(options->effects);
+    diagnosis.candidates = options->effects == "all" ? DiagnosisCandidates() : ParseEffectList(options->effects);
     if (const std::string problem = diagnosis.Validate(); !problem.empty()) throw Error(problem);
     const FlightSourceOptions source = SourceOptions(options->identify);
     const LoadedFlights training = LoadTrainingFlights(options->flights, source);

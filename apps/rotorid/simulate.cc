@@ -27,7 +27,8 @@ struct SimulateArguments {
   std::string noise;  // empty: the preset's (pixhawk for A, B and vehicle files)
   std::string profile = "paper";
   std::vector<std::string> effects;
-  std::string seed = "1";  // parsed here: CLI11 would wrap "-1" around to 2^64 - 1
+  std::vector<double> external_force;  // world x, y, z in N
+  std::string seed = "1";              // parsed here: CLI11 would wrap "-1" around to 2^64 - 1
   SimulationOptions options;
   bool quiet = false;
 };
@@ -49,6 +50,9 @@ int RunSimulate(const CLI::App& app, const SimulateArguments& args) {
   options.noise = NoiseLevels::Preset(!args.noise.empty() ? args.noise : preset ? preset->noise : "pixhawk");
   options.profile = ParseFlightProfile(args.profile);
   for (const std::string& effect : args.effects) options.effects.Assign(effect);
+  if (!args.external_force.empty())
+    options.external_force.world_n =
+        Eigen::Vector3d(args.external_force[0], args.external_force[1], args.external_force[2]);
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
   MarkOptionsValidated();
   const SimulationVehicle simulated = preset ? *preset : LoadSimulationVehicle(args.vehicle_path);
@@ -120,6 +124,14 @@ Command AddSimulateCommand(CLI::App& root) {
   app->add_flag("--battery", args->options.battery.enabled,
                 "simulate the battery: log the motor commands (rotor_signal: command) and a voltage column (4.2 -> "
                 "3.7 V over the flight, 0.3 V sag at hover thrust); the vehicle file gets the command_to_speed map");
+  app->add_option(
+         "--external-force", args->external_force,
+         "a force rotorid does not model (tether, payload, wind) at O_d in the world frame (z up): x,y,z in N, "
+         "at most 0.3 m g")
+      ->delimiter(',')
+      ->expected(3);
+  app->add_option("--external-force-period", args->options.external_force.turn_period_s,
+                  "its horizontal part turns about z with this period in s (default 0: constant)");
   app->add_option("--physics-rate", args->options.physics_rate_hz, "RK4 integration rate in Hz (default 2000)");
   app->add_flag("--mocap", args->options.mocap, "also log motion capture: pos_x,pos_y,pos_z,roll,pitch,yaw");
   app->add_option("--jitter-s", args->options.jitter_s, "standard deviation of the sampling instants in s (default 0)");

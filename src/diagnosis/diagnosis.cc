@@ -11,6 +11,7 @@
 #include "diagnosis/linearization.h"
 #include "diagnosis/scale_free.h"
 #include "diagnosis/selection.h"
+#include "diagnosis/unexplained.h"
 #include "diagnosis/verdict_text.h"
 #include "diagnosis/verdicts.h"
 #include "rotorid/core/error.h"
@@ -19,6 +20,15 @@
 #include "rotorid/refine/refine_checks.h"
 
 namespace rotorid {
+
+std::vector<EffectKind> DiagnosisCandidates() {
+  std::vector<EffectKind> kinds = DefaultCandidates();
+  for (const char* name : {"rotor_thrust_scale", "imu_lever_arm"}) {
+    const EffectKind kind = ParseEffectKind(name);
+    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) kinds.push_back(kind);
+  }
+  return kinds;
+}
 
 std::string DiagnosisOptions::Validate() const {
   if (const std::string problem = identify.Validate(); !problem.empty()) return problem;
@@ -36,6 +46,8 @@ std::string DiagnosisOptions::Validate() const {
   if (max_effects < 0) return "max_effects must not be negative";
   if (!(screen_fraction >= 0.0 && screen_fraction <= 1.0)) return "screen_fraction must lie in [0, 1]";
   if (!(rival_fraction >= 0.0 && rival_fraction <= 1.0)) return "rival_fraction must lie in [0, 1]";
+  if (!(unexplained_floor_ratio >= 1.0)) return "unexplained_floor_ratio must be at least 1";
+  if (!(unexplained_min_pct >= 0.0)) return "unexplained_min_pct must not be negative";
   if (const std::string problem = delay_search.Validate(); !problem.empty()) return problem;
   if (refine_max_iterations < 1) return "refine_max_iterations must be at least 1";
   if (num_threads < 1) return "num_threads must be at least 1";
@@ -92,6 +104,18 @@ class HeldOutEvaluator : public internal::ModelFitter {
         noise_sq_ += internal::NoiseResidualSquares(flight, record.fold_parameters[k]);
     record.gap = internal::ScoreHeldOut(record.held_out, scales_, noise_sq_);
     return record;
+  }
+
+  // A model's held-out gap with the noise floor of its own fitted parameters. The baseline's floor
+  // serves the selection, but where the linear model's coefficients are far off it is no floor for
+  // the final model: A on a circle with rotor drag and a lever arm, Mz's floor 26 % of the baseline's
+  // rotor moment against 4 % of the final model's, whose gap of 25 % is then at its floor.
+  HeldOutGap ScoreWithOwnNoiseFloor(const ModelRecord& record) const {
+    ComponentVector noise_sq = ComponentVector::Zero();
+    for (int k = 0; k < num_folds(); ++k)
+      for (const ProcessedFlight& flight : folds_[k].evaluate)
+        noise_sq += internal::NoiseResidualSquares(flight, record.fold_parameters[k]);
+    return internal::ScoreHeldOut(record.held_out, scales_, noise_sq);
   }
 
   // Fits each model in every fold (in parallel), starting from `initial[m][k]`.
@@ -526,7 +550,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
 
   // How far: the held-out gap after each kept effect, in the order they were added.
   diagnosis.steps = internal::GapAfterEachEffect(&context, backward.kept);
-  diagnosis.final_gap = context.records.at(kept).gap;
+  diagnosis.final_gap = evaluator.ScoreWithOwnNoiseFloor(context.records.at(kept));
 
   // Verdicts, confounding, notes and ranking.
   const internal::SelectionOutcome outcome{forward,       backward, diagnosis.steps, diagnosis.final_effects,
@@ -556,13 +580,18 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.selected = diagnosis.selected_scale_free;
   diagnosis.selected.insert(diagnosis.selected.end(), backward.kept.begin(), backward.kept.end());
   timer.Mark("scale-free tests");
-  for (EffectVerdict& v : verdicts) v.note = internal::VerdictNote(v, options, diagnosis.final_model);
+  for (EffectVerdict& v : verdicts) {
+    v.note = internal::VerdictNote(v, options, diagnosis.final_model);
+    if (const std::string product = internal::DiscardedProductStatement(v, full.solution.discarded); !product.empty())
+      v.note += "; " + product;
+  }
   diagnosis.ranking = internal::Rank(std::move(verdicts), diagnosis.selected, unavailable);
 
   // Where.
   diagnosis.where_component = internal::WhereComponent(diagnosis.baseline);
   diagnosis.where =
       LocateGap(full, final_model.predicted, diagnosis.final_effects, options.candidates, options.location);
+  diagnosis.unexplained = internal::FindUnexplained(diagnosis.baseline, diagnosis.final_gap, diagnosis.where, options);
   timer.Mark("where");
 
   diagnosis.refinements = evaluator.refinements();

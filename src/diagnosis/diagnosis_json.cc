@@ -47,9 +47,12 @@ json GapJson(const HeldOutGap& gap) {
 }
 
 json TestJson(const EffectTest& test) {
-  return {{"shrink_pct", test.shrink_pct},           {"f_statistic", test.f_statistic},
-          {"p_value", test.p_value},                 {"added_parameters", test.added_parameters},
-          {"effective_samples", test.effective_samples}, {"significant", test.significant},
+  return {{"shrink_pct", test.shrink_pct},
+          {"f_statistic", test.f_statistic},
+          {"p_value", test.p_value},
+          {"added_parameters", test.added_parameters},
+          {"effective_samples", test.effective_samples},
+          {"significant", test.significant},
           {"screened", test.screened}};
 }
 
@@ -112,6 +115,23 @@ json LocationJson(const GapLocation& where) {
           {"signatures", signatures}};
 }
 
+json UnexplainedJson(const std::vector<UnexplainedResidual>& unexplained) {
+  json out = json::array();
+  for (const UnexplainedResidual& u : unexplained) {
+    json stretch = nullptr;
+    if (u.stretch)
+      stretch = {{"flight", u.stretch->flight}, {"start_s", u.stretch->start_s}, {"end_s", u.stretch->end_s}};
+    out.push_back({{"component", kWrenchComponentNames[u.component]},
+                   {"gap_pct", u.gap_pct},
+                   {"noise_floor_pct", u.noise_floor_pct},
+                   {"share_pct", u.share_pct},
+                   {"band", {{"low_hz", u.band_low_hz}, {"high_hz", u.band_high_hz}, {"share_pct", u.band_share_pct}}},
+                   {"stretch", stretch},
+                   {"note", u.note}});
+  }
+  return out;
+}
+
 }  // namespace
 
 json DiagnosisOptionsJson(const DiagnosisOptions& o) {
@@ -131,6 +151,8 @@ json DiagnosisOptionsJson(const DiagnosisOptions& o) {
           {"bands_hz", bands},
           {"window_s", o.location.window_s},
           {"window_step_s", o.location.window_step_s},
+          {"unexplained_floor_ratio", o.unexplained_floor_ratio},
+          {"unexplained_min_pct", o.unexplained_min_pct},
           {"num_threads", o.num_threads}};
 }
 
@@ -207,6 +229,7 @@ json DiagnosisJson(const Diagnosis& d) {
           {"steps", steps},
           {"confounded", confounded},
           {"final", final_block},
+          {"unexplained", UnexplainedJson(d.unexplained)},
           {"initial_delay_s", d.initial_delay_s},
           {"refinements", d.refinements},
           {"seconds", d.seconds},

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "diagnosis/selection.h"
+#include "diagnosis/unexplained.h"
 #include "rotorid/model/parameters.h"
 
 namespace rotorid {
@@ -16,7 +17,8 @@ std::string FormatEffectMagnitude(EffectKind kind, const Eigen::VectorXd& value,
 
 std::string DiagnosisVerdict(const Diagnosis& d) {
   return "held out: " + d.validation + " (" + std::to_string(d.held_out_row_samples) + " row samples)\n" +
-         internal::WhereText(d) + internal::WhichText(d) + internal::HowFarText(d);
+         internal::WhereText(d) + internal::WhichText(d) + internal::HowFarText(d) +
+         internal::UnexplainedText(d.unexplained);
 }
 
 namespace internal {
@@ -214,8 +216,9 @@ std::string WhichText(const Diagnosis& d) {
         unscored += (unscored.empty() ? "" : ", ") + std::string(EffectName(v.kind));
     out << "which: no candidate effect removes significant held-out residual; the model explains these flights "
            "as well as the candidates can"
-        << (unscored.empty() ? std::string()
-                             : " in the components it scores (" + unscored + ": mostly in one it does not score, below)")
+        << (unscored.empty()
+                ? std::string()
+                : " in the components it scores (" + unscored + ": mostly in one it does not score, below)")
         << "\n";
   }
   for (const EffectVerdict& v : d.ranking) {
@@ -259,6 +262,12 @@ std::string HowFarText(const Diagnosis& d) {
     }
     out << "  (noise floor ";
     value(d.baseline.noise_floor_pct[c]);
+    // The final model's own floor, where its parameters move it (unexplained[] judges against it).
+    const std::optional<double>&before = d.baseline.noise_floor_pct[c], &after = d.final_gap.noise_floor_pct[c];
+    if (!d.steps.empty() && after && (!before || std::abs(*after - *before) > 0.05 * *before)) {
+      out << "; with the selected effects ";
+      value(after);
+    }
     out << ")\n";
     // Each gap divides by its own model's rotor wrench, which an effect can change (per-rotor thrust
     // scales cancel a static moment that the baseline's first moment balanced: jana01's My read 8.4 ->

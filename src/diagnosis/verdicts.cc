@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "diagnosis/statistics.h"
+#include "rotorid/core/units.h"
 #include "rotorid/model/parameters.h"
 
 namespace rotorid::internal {
@@ -171,6 +172,28 @@ std::vector<EffectVerdict> Rank(std::vector<EffectVerdict> verdicts, const std::
   ranking.insert(ranking.end(), rest.begin(), rest.end());
   ranking.insert(ranking.end(), unavailable.begin(), unavailable.end());
   return ranking;
+}
+
+std::string DiscardedProductStatement(const EffectVerdict& v, const std::vector<DiscardedParameter>& discarded) {
+  if (v.kind != ParseEffectKind("misalignment") || v.value.size() != 3 || v.std.size() != 3) return {};
+  static const char* const kAxes = "xyz";
+  static const char* const kProducts[3] = {"I_yz", "I_xz", "I_xy"};  // of the two axes a rotation about k mixes
+  std::ostringstream out;
+  for (int k = 0; k < 3; ++k) {
+    if (!(v.std[k] > 0.0) || std::abs(v.value[k]) < 3.0 * v.std[k]) continue;
+    for (const DiscardedParameter& p : discarded) {
+      const size_t dot = p.name.rfind('.');
+      if (p.name.substr(dot == std::string::npos ? 0 : dot + 1) != kProducts[k]) continue;
+      out << (out.tellp() > 0 ? "; " : "") << "its " << kAxes[k] << " coordinate (" << std::setprecision(3)
+          << v.value[k] * kRadToDeg << " +- " << std::setprecision(2) << v.std[k] * kRadToDeg
+          << " deg) mixes the rows the discarded " << p.name << " couples (" << std::setprecision(3) << p.value
+          << " +- " << std::setprecision(2) << p.std << " kg m^2 when dropped at " << std::fixed << std::setprecision(1)
+          << p.rel_std_pct << std::defaultfloat
+          << " % std, held at 0): it may be that product of inertia rather than an IMU rotation";
+      break;
+    }
+  }
+  return out.str();
 }
 
 int WhereComponent(const HeldOutGap& baseline) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "diagnosis/unexplained.h"
 #include "diagnosis/verdict_text.h"
 #include "report/html_text.h"
 #include "rotorid/core/error.h"
@@ -268,6 +269,13 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::function<std::string(co
   html += "<p><strong>Selected effects:</strong> " + (selected.empty() ? std::string("none") : selected) +
           ". Judged on " + Html(d.validation) + " (" + std::to_string(d.held_out_row_samples) +
           " held-out row samples).</p>\n";
+  // What the selected effects leave far above the noise floor, as the verdict says it.
+  html +=
+      "<p id=\"diagnosis_unexplained\"><strong>Unexplained</strong> (what the selected effects leave far above "
+      "the noise floor): ";
+  if (d.unexplained.empty()) html += "nothing.";
+  for (const UnexplainedResidual& u : d.unexplained) html += "<br/>" + Html(UnexplainedSentence(u)) + ".";
+  html += "</p>\n";
   html += "<h3>Which effect</h3>\n" + RankingTable(d) + ConfoundedTable(d);
   html += "<h3>How far the held-out gap shrinks</h3>\n" + GapTables(d) + figure("fig_diagnosis");
   html += "<h3>Where the gap is</h3>\n<p>The largest held-out gap beyond the noise floor is in <strong>" +

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/units.h"
 #include "rotorid/model/rigid_body.h"
 
 namespace rotorid {
@@ -17,13 +18,22 @@ constexpr int kRotorIndex = 13;
 
 }  // namespace
 
+Eigen::Vector3d ExternalForce::At(double t_s) const {
+  if (turn_period_s <= 0.0) return world_n;
+  const double angle = 2.0 * kPi * t_s / turn_period_s;
+  return Eigen::Vector3d(std::cos(angle) * world_n.x() - std::sin(angle) * world_n.y(),
+                         std::sin(angle) * world_n.x() + std::cos(angle) * world_n.y(), world_n.z());
+}
+
 MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                                       double motor_time_constant_s, EffectChain rotor_wrench)
+                                       double motor_time_constant_s, EffectChain rotor_wrench,
+                                       ExternalForce external_force)
     : vehicle_(vehicle),
       parameters_(parameters),
       gravity_w_(0.0, 0.0, -gravity_mps2),
       motor_time_constant_s_(motor_time_constant_s),
-      rotor_wrench_(std::move(rotor_wrench)) {
+      rotor_wrench_(std::move(rotor_wrench)),
+      external_force_(external_force) {
   if (!(gravity_mps2 >= 0.0) || !std::isfinite(gravity_mps2)) throw Error("gravity must be a finite number >= 0");
   if (!(motor_time_constant_s >= 0.0) || !std::isfinite(motor_time_constant_s))
     throw Error("motor_time_constant_s must be a finite number >= 0");
@@ -54,7 +64,8 @@ Eigen::VectorXd MultirotorDynamics::ActingRotorRates(double t_s, const SimState&
   return (command(t_s + kProbe) - command(t_s)) / kProbe;
 }
 
-BodyAcceleration MultirotorDynamics::Accelerations(const SimState& state, const Eigen::VectorXd& rotor_speed_radps,
+BodyAcceleration MultirotorDynamics::Accelerations(double t_s, const SimState& state,
+                                                   const Eigen::VectorXd& rotor_speed_radps,
                                                    const Eigen::VectorXd& rotor_rate_radps2) const {
   Wrench<double> wrench = Wrench<double>::Zero();
   if (!vehicle_.rotors.empty()) {
@@ -77,6 +88,8 @@ BodyAcceleration MultirotorDynamics::Accelerations(const SimState& state, const 
     }
     wrench = RotorWrench<double>(rotor_speed_radps, parameters_.rotor.kt, parameters_.rotor.kd, vehicle_, terms);
   }
+  if (external_force_.active())
+    wrench.head<3>() += state.attitude_wb.normalized().conjugate() * external_force_.At(t_s);
   BodyAcceleration acc;
   ForwardDynamics<double>(state.angular_velocity_b_radps, wrench, parameters_.mass_kg, parameters_.body.first_moment,
                           parameters_.body.inertia, &acc.specific_force_b_mps2, &acc.angular_acceleration_b_radps2);
@@ -119,7 +132,7 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   const Eigen::VectorXd rates = motor_time_constant_s_ > 0.0 || !rotor_wrench_.kinds.empty()
                                     ? ActingRotorRates(t_s, state, command)
                                     : Eigen::VectorXd();
-  const BodyAcceleration acc = Accelerations(state, acting, rates);
+  const BodyAcceleration acc = Accelerations(t_s, state, acting, rates);
 
   Eigen::VectorXd dx(x.size());
   dx.segment<3>(kPositionIndex) = state.velocity_w_mps;

@@ -229,6 +229,9 @@ std::string SimulationOptions::Validate() const {
   if (bad(hover_altitude_m) || hover_altitude_m < 0.1 || hover_altitude_m > 1000.0)
     return "hover altitude must be within [0.1, 1000] m (got " + FormatNumber(hover_altitude_m) + ")";
   if (bad(warmup_s) || warmup_s < 0.0 || warmup_s > 60.0) return "warm-up must be within [0, 60] s";
+  if (!external_force.world_n.allFinite()) return "the external force must be finite";
+  if (bad(external_force.turn_period_s) || external_force.turn_period_s < 0.0)
+    return "the external force's turn period must be >= 0 s (0: constant)";
   if (bad(circle_radius_m) || circle_radius_m < 0.2 || circle_radius_m > 100.0)
     return "circle radius must be within [0.2, 100] m (got " + FormatNumber(circle_radius_m) + ")";
   if (bad(circle_speed_mps) || circle_speed_mps < 0.0 || circle_speed_mps > 10.0 ||
@@ -440,9 +443,13 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   double accelerometer_delay_s = 0.0;
   for (size_t j = 0; j < sensor.kinds.size(); ++j)
     accelerometer_delay_s += sensor.kinds[j]->SimulatedAccelerometerDelay(sensor.values[j]);
-  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
-                                    ActingEffects(effects, EffectStage::kRotorWrench));
   const double g = options.gravity_mps2;
+  // Beyond this the controller's hover trim, made without it, is too far off to fly the references.
+  if (options.external_force.world_n.norm() > 0.3 * truth.mass_kg * g)
+    throw Error("simulation options: the external force (" + FormatNumber(options.external_force.world_n.norm()) +
+                " N) must not exceed 0.3 m g = " + FormatNumber(0.3 * truth.mass_kg * g) + " N");
+  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
+                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force);
 
   // The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
   RandomStream controller_random(options.seed, kControllerStream);
@@ -494,7 +501,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     const double t = times[k];
     const Eigen::Matrix3d r_wb = state.attitude_wb.toRotationMatrix();
     const Eigen::VectorXd acting = dynamics.ActingRotorSpeeds(t, state, command);
-    const BodyAcceleration acc = dynamics.Accelerations(state, acting, dynamics.ActingRotorRates(t, state, command));
+    const BodyAcceleration acc = dynamics.Accelerations(t, state, acting, dynamics.ActingRotorRates(t, state, command));
     if (!state.position_w_m.allFinite() || state.position_w_m.norm() > 1000.0 ||
         r_wb(2, 2) < std::cos(80.0 / kRadToDeg))
       throw Error("the simulated flight diverged at t = " + FormatNumber(t) + " s (tilt " +

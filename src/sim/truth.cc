@@ -47,6 +47,9 @@ Json OptionsJson(const SimulationResult& result) {
                               {"hover_sag_v", o.battery.hover_sag_v},
                               {"reference_voltage_v", result.vehicle.command_to_speed_voltage_v.value_or(0.0)},
                               {"command_to_speed", Vector(result.vehicle.command_to_speed->coefficients)}};
+  if (o.external_force.active())
+    options["external_force"] =
+        Json{{"world_n", Vector(o.external_force.world_n)}, {"turn_period_s", o.external_force.turn_period_s}};
   return options;
 }
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "rotorid/diagnosis/diagnosis.h"
 #include "rotorid/model/effects.h"
 #include "support/test_support.h"
 
@@ -54,7 +55,7 @@ TEST(DiagnoseCliTest, WithheldDelayThroughTheCommandLine) {
   const std::string component = report["where"]["component"];
   EXPECT_TRUE(component == "Fz" || component == "Mx" || component == "My") << component;
   ASSERT_TRUE(report["ranking"].is_array());
-  ASSERT_EQ(report["ranking"].size(), DefaultCandidates().size());  // every effect of "all" is ranked
+  ASSERT_EQ(report["ranking"].size(), DiagnosisCandidates().size());  // every effect of "all" is ranked
   for (const nlohmann::json& entry : report["ranking"]) {
     for (const char* key : {"effect", "significant", "shrink_pct", "magnitude"})
       EXPECT_TRUE(entry.contains(key)) << key;
@@ -76,6 +77,33 @@ TEST(DiagnoseCliTest, WithheldDelayThroughTheCommandLine) {
   EXPECT_LT(report["final"]["relative_error_pct"]["Mx"].get<double>(),
             report["baseline"]["relative_error_pct"]["Mx"].get<double>());
   EXPECT_EQ(report["settings"]["diagnosis"]["folds"], 3);
+}
+
+// A force rotorid does not model (simulate --external-force, 4 % of B's weight turning once per 12 s)
+// beside a 10 ms delay: the delay is named, and the force is called unexplained on the console, in the
+// JSON (INTERFACE.md 6) and in the HTML report.
+TEST(DiagnoseCliTest, ExternalForceIsUnexplainedOnTheConsoleTheJsonAndTheReport) {
+  const std::string dir = MakeTempDir("rotorid-diagnose-force");
+  const auto sim = RunRotorid({"simulate", "--preset", "B", "--seconds", "40", "--seed", "27", "--effect",
+                               "delay_s=0.01", "--external-force", "0.5,0,0", "--external-force-period", "12", "--out",
+                               dir + "/flight.csv", "--vehicle-out", dir + "/B.yaml", "--quiet"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto r = RunRotorid({"diagnose", "--vehicle", dir + "/B.yaml", "--log", dir + "/flight.csv", "--folds", "3",
+                             "--json", dir + "/diagnosis.json", "--report", dir + "/report"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("which: delay"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("unexplained: Fx"), std::string::npos) << r.out;
+  const nlohmann::json report = LoadJson(dir + "/diagnosis.json");
+  ASSERT_TRUE(report["unexplained"].is_array());
+  ASSERT_GE(report["unexplained"].size(), 2u);
+  for (const nlohmann::json& u : report["unexplained"]) {
+    EXPECT_TRUE(u["component"] == "Fx" || u["component"] == "Fy") << u.dump();
+    EXPECT_GT(u["share_pct"].get<double>(), 89.0);
+    EXPECT_NE(u["note"].get<std::string>().find("external force"), std::string::npos);
+  }
+  const std::string html = testing::Slurp(dir + "/report/report.html");
+  EXPECT_NE(html.find("id=\"diagnosis_unexplained\""), std::string::npos);
+  EXPECT_NE(html.find("a force off the thrust axis"), std::string::npos);
 }
 
 // A clean Crazyflie-like flight with every candidate's inputs (seed 106, where a 0.3 mm lever arm

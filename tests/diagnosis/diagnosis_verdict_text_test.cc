@@ -9,6 +9,7 @@
 
 #include "diagnosis/candidate_kinds.h"
 #include "diagnosis/verdict_text.h"
+#include "diagnosis/verdicts.h"
 #include "rotorid/diagnosis/diagnosis.h"
 
 namespace rotorid::internal {
@@ -17,6 +18,7 @@ namespace {
 using rotorid::testing::kAccBias;
 using rotorid::testing::kDelay;
 using rotorid::testing::kGyroBias;
+using rotorid::testing::kMisalignment;
 using rotorid::testing::kMotorLag;
 
 Eigen::VectorXd Scalar(double value) { return Eigen::VectorXd::Constant(1, value); }
@@ -35,6 +37,33 @@ TEST(OnBoundStatementTest, NamesTheEffectOrCoordinateAndItsBound) {
   // A delay on the bound of a narrower search range than its descriptor's: the effect is named.
   EXPECT_EQ(OnBoundStatement(kDelay, Scalar(0.04)),
             "delay ended on a bound of its search range: the data push it further");
+}
+
+// A misalignment about z beyond 3 std beside a discarded I_xy is said to be possibly that product of
+// inertia (the independent simulator's A flights); about x, with I_yz estimated, or within 3 std: nothing.
+TEST(DiscardedProductStatementTest, NamesTheProductOfInertiaAMisalignmentMayStandFor) {
+  EffectVerdict v;
+  v.kind = kMisalignment;
+  v.value = Eigen::Vector3d(0.0, 0.001, -0.0042);
+  v.std = Eigen::Vector3d(1e-4, 1e-4, 5e-4);
+  DiscardedParameter product;
+  product.name = "A.I_xy";
+  product.value = 9.93e-5;
+  product.std = 1.13e-5;
+  product.rel_std_pct = 11.4;
+  const std::string statement = DiscardedProductStatement(v, {product});
+  EXPECT_EQ(statement,
+            "its z coordinate (-0.241 +- 0.029 deg) mixes the rows the discarded A.I_xy couples (9.93e-05 +- 1.1e-05 "
+            "kg m^2 when dropped at 11.4 % std, held at 0): it may be that product of inertia rather than an IMU "
+            "rotation");
+  v.value[2] = -0.001;  // within 3 std
+  EXPECT_EQ(DiscardedProductStatement(v, {product}), "");
+  v.value[2] = -0.0042;
+  product.name = "A.I_yz";  // the y coordinate (10 std) mixes x and z: I_xz, not discarded here
+  EXPECT_EQ(DiscardedProductStatement(v, {product}), "");
+  v.kind = kAccBias;
+  product.name = "A.I_xy";
+  EXPECT_EQ(DiscardedProductStatement(v, {product}), "");
 }
 
 // The detectable size of an absent effect is computed with the selected effects in the model; the

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -137,6 +138,21 @@ TEST(SimCliTest, CrazyflieLikePresetWithItsBattery) {
   std::filesystem::remove_all(dir);
 }
 
+// The external force reaches the truth file; without one the truth has no such key.
+TEST(SimCliTest, ExternalForceIsRecordedInTheTruth) {
+  const std::string dir = MakeTempDir("sim-cli");
+  const auto result =
+      RunRotorid(Args(dir, "pushed", {"--external-force", "0.5,-0.25,0", "--external-force-period", "12"}));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json truth = nlohmann::json::parse(Slurp(dir + "/pushed.json"));
+  const nlohmann::json& force = truth["simulation"]["external_force"];
+  EXPECT_EQ(force["world_n"], nlohmann::json::array({0.5, -0.25, 0.0}));
+  EXPECT_EQ(force["turn_period_s"], 12.0);
+  ASSERT_EQ(RunRotorid(Args(dir, "free", {})).exit_code, 0);
+  EXPECT_FALSE(nlohmann::json::parse(Slurp(dir + "/free.json"))["simulation"].contains("external_force"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SimCliTest, BadOptionsGiveAOneLineErrorAndANonZeroExit) {
   const std::string dir = MakeTempDir("sim-cli");
   const std::string out = dir + "/x.csv";
@@ -155,6 +171,9 @@ TEST(SimCliTest, BadOptionsGiveAOneLineErrorAndANonZeroExit) {
       {"simulate", "--out", out, "--profile", "loop"},
       {"simulate", "--out", out, "--effect", "battery_exponent=1"},
       {"simulate", "--out", out, "--profile", "circle", "--circle-radius", "1", "--circle-speed", "5"},
+      {"simulate", "--out", out, "--external-force", "10,0,0"},  // above 0.3 m g of A's 1.285 kg
+      {"simulate", "--out", out, "--external-force", "1,0"},
+      {"simulate", "--out", out, "--external-force", "1,0,0", "--external-force-period", "-1"},
   };
   for (const auto& args : bad) {
     std::string joined;

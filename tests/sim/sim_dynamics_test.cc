@@ -108,13 +108,36 @@ TEST(SimDynamicsTest, HoverRotorSpeedsHoldTheVehicleStill) {
   for (const auto& [vehicle, parameters] : cases) {
     const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, parameters, kStandardGravity);
     const MultirotorDynamics dynamics(vehicle, parameters, kStandardGravity, 0.0);
-    const BodyAcceleration acc = dynamics.Accelerations(SimState(), hover);
+    const BodyAcceleration acc = dynamics.Accelerations(0.0, SimState(), hover);
     EXPECT_LT((acc.specific_force_b_mps2 - Eigen::Vector3d(0, 0, kStandardGravity)).norm(), 1e-12) << vehicle.name;
     EXPECT_LT(acc.angular_acceleration_b_radps2.norm(), 1e-12) << vehicle.name;
   }
   // Configuration A hovers near the paper's 930 rad/s.
   const SimulationVehicle a = PresetVehicle("A");
   EXPECT_NEAR(HoverRotorSpeeds(a.vehicle, a.parameters, kStandardGravity).mean(), 935.0, 15.0);
+}
+
+// An external force enters the wrench at O_d as [R^T F; 0] (so the accelerometer sees it), and its
+// horizontal part turns about z: a quarter period turns +x into +y.
+TEST(SimDynamicsTest, ExternalForceTurnsInTheWorldAndEntersTheWrenchAtTheOrigin) {
+  const SimulationVehicle a = PresetVehicle("A");
+  const Eigen::VectorXd hover = HoverRotorSpeeds(a.vehicle, a.parameters, kStandardGravity);
+  ExternalForce force;
+  force.world_n = Eigen::Vector3d(0.5, 0.0, -0.2);
+  force.turn_period_s = 8.0;
+  EXPECT_LT((force.At(2.0) - Eigen::Vector3d(0.0, 0.5, -0.2)).norm(), 1e-12);
+  EXPECT_LT((force.At(8.0) - force.world_n).norm(), 1e-12);
+  const MultirotorDynamics pushed(a.vehicle, a.parameters, kStandardGravity, 0.0, {}, force);
+  const MultirotorDynamics free(a.vehicle, a.parameters, kStandardGravity, 0.0);
+  SimState yawed;  // body x along world y: the force at t = 2 s (+y) lies along body +x
+  yawed.attitude_wb = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * kPi, Eigen::Vector3d::UnitZ()));
+  const BodyAcceleration with = pushed.Accelerations(2.0, yawed, hover);
+  const BodyAcceleration without = free.Accelerations(2.0, yawed, hover);
+  const Eigen::Vector3d ds = with.specific_force_b_mps2 - without.specific_force_b_mps2;
+  const Eigen::Vector3d dw = with.angular_acceleration_b_radps2 - without.angular_acceleration_b_radps2;
+  const Eigen::Vector3d& ms = a.parameters.body.first_moment;
+  EXPECT_LT((a.parameters.mass_kg * ds - ms.cross(dw) - Eigen::Vector3d(0.5, 0.0, -0.2)).norm(), 1e-9);
+  EXPECT_LT((ms.cross(ds) + a.parameters.body.inertia * dw).norm(), 1e-9);
 }
 
 TEST(SimDynamicsTest, MotorLagFollowsAStepWithItsTimeConstant) {

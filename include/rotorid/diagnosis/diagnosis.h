@@ -31,11 +31,17 @@
 
 namespace rotorid {
 
+// The diagnosis' candidates by default (`diagnose --effects all`): DefaultCandidates() and the
+// vehicle's own effects a blind diagnosis must also consider, which `refine --effects all` leaves out
+// (an estimate of theirs is only worth refining where the diagnosis names them): per-rotor thrust
+// scales and the IMU lever arm (x, y; z held). docs/diagnosis.md, "Thrust scales and lever arms".
+std::vector<EffectKind> DiagnosisCandidates();
+
 struct DiagnosisOptions {
   // Signal processing and TLS of the linear model (the baseline).
   IdentifyOptions identify;
   // Effects considered as causes of the gap.
-  std::vector<EffectKind> candidates = DefaultCandidates();
+  std::vector<EffectKind> candidates = DiagnosisCandidates();
   // Time-blocked folds per flight when no held-out flights are given.
   int folds = 4;
   // Rows within this many seconds of a held-out block are left out of its training data, so that
@@ -70,6 +76,13 @@ struct DiagnosisOptions {
   bool reselect_essential = true;
   // Where: frequency bands, stretches of the flight.
   GapLocationOptions location;
+  // What no candidate explains (Diagnosis::unexplained): a component whose held-out gap after the
+  // selection is at least this many times its noise floor (then at least 89 % of its residual energy
+  // is model error), and whose model error beyond the floor is at least unexplained_min_pct (% of the
+  // rotor wrench; Fx, Fy of the thrust). Clean simulated flights end at 1.0-1.3 x the floor
+  // (docs/diagnosis.md, "What no candidate explains").
+  double unexplained_floor_ratio = 3.0;
+  double unexplained_min_pct = 1.0;
   // Refinements run in parallel on this many threads.
   int num_threads = 2;
 
@@ -208,6 +221,27 @@ struct SelectionStep {
   EffectTest test;
 };
 
+// What remains after the selection that no candidate explains (INTERFACE.md 6, `unexplained[]`): a
+// held-out component whose gap with the selected effects lies far above its noise floor
+// (DiagnosisOptions::unexplained_floor_ratio, unexplained_min_pct).
+struct UnexplainedResidual {
+  int component = 0;  // kWrenchComponentNames
+  // Held out, with the selected effects (Fx, Fy against the thrust): the gap, its noise floor, and
+  // the share of the component's held-out residual energy beyond that floor, 100 (1 - floor^2 / gap^2).
+  double gap_pct = 0.0;
+  double noise_floor_pct = 0.0;
+  double share_pct = 0.0;
+  // Where it lies: the frequency band holding most of the final model's residual energy in the
+  // component (identification data), with that share; the worst stretch of the flight (of the
+  // linear model's residual) this component dominates, when one does.
+  double band_low_hz = 0.0;
+  double band_high_hz = 0.0;
+  double band_share_pct = 0.0;
+  std::optional<FlightStretch> stretch;
+  // What it can be: "a force off the thrust axis that no sensor effect reproduces: ...".
+  std::string note;
+};
+
 struct Diagnosis {
   std::string validation;  // "4 time-blocked folds of 1 flight" or "2 held-out flights"
   int held_out_row_samples = 0;
@@ -226,6 +260,8 @@ struct Diagnosis {
   std::vector<EffectKind> final_model;
   std::vector<SelectionStep> steps;
   HeldOutGap final_gap;  // with the selected effects, held-out
+  // What the selected effects leave far above the noise floor; empty when nothing is left.
+  std::vector<UnexplainedResidual> unexplained;
   // The final model fitted on all identification data.
   std::map<std::string, double> linear_parameters;
   std::map<std::string, double> final_parameters;

@@ -30,6 +30,17 @@ struct SimState {
   Eigen::VectorXd rotor_speed_radps;  // actual |Omega_i|: the motor-lag state (unused when tau = 0)
 };
 
+// A force on the vehicle that rotorid's model does not have (a tether, a payload's pull, wind),
+// acting at O_d, in the world frame: its horizontal part turns about z with `turn_period_s`
+// (0: constant), like a wind whose direction drifts. It reaches the accelerometer like any force.
+struct ExternalForce {
+  Eigen::Vector3d world_n = Eigen::Vector3d::Zero();
+  double turn_period_s = 0.0;
+
+  bool active() const { return !world_n.isZero(); }
+  Eigen::Vector3d At(double t_s) const;
+};
+
 struct BodyAcceleration {
   Eigen::Vector3d specific_force_b_mps2 = Eigen::Vector3d::Zero();          // s = R^T (a - g_w) at O_d
   Eigen::Vector3d angular_acceleration_b_radps2 = Eigen::Vector3d::Zero();  // w'
@@ -45,15 +56,15 @@ class MultirotorDynamics {
   // `rotor_wrench`: the rotor-wrench effects acting (rotorid/model/effects.h), the same models the
   // identification corrects for.
   MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                     double motor_time_constant_s, EffectChain rotor_wrench = {});
+                     double motor_time_constant_s, EffectChain rotor_wrench = {}, ExternalForce external_force = {});
 
   // The rotor speeds acting at time t: the lag state, or the command itself when motor_time_constant_s = 0.
   Eigen::VectorXd ActingRotorSpeeds(double t_s, const SimState& state, const RotorCommand& command) const;
   // Their rates Omega_i': the lag's, or the slope of the (piecewise-linear) command.
   Eigen::VectorXd ActingRotorRates(double t_s, const SimState& state, const RotorCommand& command) const;
-  // s and w' of the body in `state` under the rotor wrench of these rotor speeds and rates (rates
-  // matter only to rotor-wrench effects; empty: zero).
-  BodyAcceleration Accelerations(const SimState& state, const Eigen::VectorXd& rotor_speed_radps,
+  // s and w' of the body in `state` at time t under the rotor wrench of these rotor speeds and rates
+  // (rates matter only to rotor-wrench effects; empty: zero) and the external force.
+  BodyAcceleration Accelerations(double t_s, const SimState& state, const Eigen::VectorXd& rotor_speed_radps,
                                  const Eigen::VectorXd& rotor_rate_radps2 = {}) const;
   // One classical Runge-Kutta (RK4) step of h seconds from t; the rotor lag is part of the state,
   // the quaternion is renormalised after the step.
@@ -75,6 +86,7 @@ class MultirotorDynamics {
   Eigen::Vector3d gravity_w_;
   double motor_time_constant_s_;
   EffectChain rotor_wrench_;
+  ExternalForce external_force_;
 };
 
 // Torque-free motion (no gravity, no rotors) of a body with mass, first moment and inertia at O_d,

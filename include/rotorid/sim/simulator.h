@@ -19,6 +19,7 @@
 #include "rotorid/core/vehicle.h"
 #include "rotorid/model/effects.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/sim/dynamics.h"
 
 namespace rotorid {
 
@@ -94,6 +95,8 @@ struct SimulationOptions {
   double circle_speed_mps = 2.0;
   // The simulated battery (off: the log holds rotor speeds and no voltage).
   BatteryOptions battery;
+  // A force rotorid does not model (tether, payload, wind); at most 0.3 m g (docs/simulator.md 1).
+  ExternalForce external_force;
   // Relative error (5-10 % drawn per seed, random sign) of the controller's kt, kd and inertia.
   double controller_error_min = 0.05;
   double controller_error_max = 0.10;
