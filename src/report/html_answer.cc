@@ -178,6 +178,11 @@ std::string GapItems(const ReportInput& input, const Model& model) {
   items += "<li>What closes it: " +
            (closed.empty() ? std::string("no candidate effect (the gap is noise, or none of them)") : closed) +
            "</li>\n";
+  for (const UnexplainedResidual& u : d.unexplained)
+    items += "<li><strong>Unexplained:</strong> " + std::string(kWrenchComponentNames[u.component]) + " " +
+             Pct(u.gap_pct, 1) + " % against a noise floor of " + Pct(u.noise_floor_pct, 1) + " %, mostly " +
+             Html(FormatValue("%.2g", u.band_low_hz)) + "-" + Html(FormatValue("%.2g", u.band_high_hz)) +
+             " Hz: " + Html(u.note) + "</li>\n";
   return items;
 }
 
