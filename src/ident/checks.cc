@@ -9,6 +9,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/model/parameters.h"
 
@@ -323,8 +324,26 @@ CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolutio
     p.value[name] = solution.chi[k];
     p.std[name] = solution.std[k];
     p.essential[name] = solution.essential[k];
+    if (PredictsWithProfiled(solution, k)) {
+      p.predicts_with[name] = solution.profiled_chi[k];
+      p.predicts_with_std[name] = solution.profiled_std[k];
+    }
   }
+  p.covariance_names = system.parameter_names;
+  p.covariance = solution.covariance;
   return p;
+}
+
+CheckedParameters CheckedFromSolution(const IdentificationResult& linear, const TlsSolution& solution) {
+  CheckedParameters p = CheckedFromSolution(linear.system, solution);
+  p.mass_kg = ConfigurationMasses(linear.flights);
+  return p;
+}
+
+std::map<std::string, double> ConfigurationMasses(const std::vector<ProcessedFlight>& flights) {
+  std::map<std::string, double> mass;
+  for (const ProcessedFlight& f : flights) mass.emplace(f.vehicle.name, f.vehicle.mass_kg);
+  return mass;
 }
 
 namespace {
@@ -470,6 +489,7 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
     checks.push_back({"kd_positive", CheckStatus::kOk,
                       label + ": kd = " + ShortNumber(kd.value) + (kd.estimated ? "" : " (not estimated)")});
   for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd, yaw_scale_flipped));
+  for (Check& c : PhysicalConsistencyChecks(p, label)) checks.push_back(std::move(c));
   return checks;
 }
 
@@ -511,7 +531,8 @@ void ExcuseLinearParameterErrors(const std::vector<Check>& linear, const std::ve
   for (const Check& failed : linear) {
     const int n = seen[failed.name]++;
     if (failed.status != CheckStatus::kError ||
-        (failed.name != "kt_positive" && failed.name != "kd_positive" && failed.name != "inertia"))
+        (failed.name != "kt_positive" && failed.name != "kd_positive" && failed.name != "inertia" &&
+         failed.name != "physical_consistency"))
       continue;
     const Check* passed = nth(with_effects, failed.name, n);
     if (!passed || passed->status != CheckStatus::kOk) continue;
@@ -542,7 +563,7 @@ IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const I
     throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(*checks));
   }
   for (Check& c :
-       CheckParameters(CheckedFromSolution(result.system, result.solution), result.system.config_names, "linear"))
+       CheckParameters(CheckedFromSolution(result, result.solution), result.system.config_names, "linear"))
     checks->push_back(std::move(c));
   for (Check& c : CheckRelativeError(result.relative_error_pct, "linear", /*held_out=*/false))
     checks->push_back(std::move(c));

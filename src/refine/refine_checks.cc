@@ -45,8 +45,12 @@ void Append(std::vector<Check>* to, std::vector<Check> from) {
 // std is 0 meaning "not known", not "exactly determined"; the confounded coordinates are named.
 std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, const RefineResult& refined,
                                           const std::string& label) {
-  CheckedParameters parameters = CheckedFromSolution(linear.system, refined.refined);
-  if (!refined.has_covariance) parameters.std.clear();
+  CheckedParameters parameters = CheckedFromSolution(linear, refined.refined);
+  if (!refined.has_covariance) {
+    parameters.std.clear();
+    parameters.predicts_with_std.clear();
+    parameters.covariance_names.clear();
+  }
   std::vector<Check> checks = CheckParameters(parameters, linear.system.config_names, label);
   if (refined.rank_deficient) {
     const std::string names = Join(refined.confounded);
@@ -94,7 +98,7 @@ std::vector<Check> CheckRefinement(const IdentificationResult& linear, const Ref
 void ExcuseLinearErrorsTheRefinementExplains(const IdentificationResult& linear, const RefineResult& refined,
                                              std::vector<Check>* checks) {
   ExcuseLinearParameterErrors(
-      CheckParameters(CheckedFromSolution(linear.system, linear.solution), linear.system.config_names, "linear"),
+      CheckParameters(CheckedFromSolution(linear, linear.solution), linear.system.config_names, "linear"),
       RefinedParameterChecks(linear, refined, "refined"), checks);
   ExcuseLinearRelativeError(linear, refined, checks);
 }

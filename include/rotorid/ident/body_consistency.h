@@ -1,0 +1,39 @@
+#pragma once
+
+// The check `physical_consistency` (INTERFACE.md 6, MODEL.md 10) of a model's parameters: each body
+// the model predicts with -- a configuration's inertia with each of its first moments (one, or one per
+// flight) and the configuration's mass -- must be one some mass distribution has. When it is not, the
+// check names the likely cause and how far the estimate lies from the nearest consistent body, in its
+// own std (ProjectOntoConsistentBodies): a large distance is itself a finding.
+
+#include <string>
+#include <vector>
+
+#include "rotorid/ident/checks.h"
+#include "rotorid/model/physical_consistency.h"
+
+namespace rotorid {
+
+struct BodyAssessment {
+  std::string name;    // "A", or "A.flight2" for a configuration with per-flight first moments
+  std::string config;  // "A"
+  double mass_kg = 0.0;
+  BodyParameters predicted;  // the values the model predicts with
+  PhysicalConsistency consistency;
+  // The nearest consistent body in the estimate's metric (its std, and covariance where known);
+  // the predicted body itself, at distance 0, when that is consistent. Not computed without a std.
+  bool has_projection = false;
+  ConsistentProjection projection;
+  std::string cause;  // why it is not a body, in words; empty when it is
+};
+
+// One assessment per body of each configuration in p.mass_kg, in the configurations' order of
+// p.mass_kg and the first moments' order of their names.
+std::vector<BodyAssessment> AssessBodies(const CheckedParameters& p);
+
+// `physical_consistency`, one per body: ok with the centre of mass and the inertia about it, or an
+// error naming the cause (a discarded inertia, a first moment the flights do not fix, a wrong mass or
+// geometry) and the distance to the nearest consistent body. `label` names the model ("linear").
+std::vector<Check> PhysicalConsistencyChecks(const CheckedParameters& p, const std::string& label);
+
+}  // namespace rotorid
