@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "rotorid/core/text.h"
 
@@ -126,6 +127,82 @@ std::string CauseOf(const CheckedParameters& p, const BodyAssessment& a,
 }
 
 }  // namespace
+
+namespace {
+
+// The values of t with which every body (one per first moment) of a configuration, with the inertia
+// columns' predicted values plus t `direction`, is physical.
+InertiaRange CommonShift(double mass_kg, const std::vector<int>& first_moments, const std::array<int, 6>& inertia,
+                         const Eigen::VectorXd& predicted, const Eigen::Matrix3d& direction) {
+  InertiaRange range{0.0, std::numeric_limits<double>::infinity()};
+  for (int ms : first_moments) {
+    Eigen::Matrix<double, kNumBodyParameters, 1> chi;
+    for (int i = 0; i < 3; ++i) chi[i] = predicted[ms + i];
+    for (int i = 0; i < 6; ++i) chi[3 + i] = predicted[inertia[i]];
+    const InertiaRange body = AllowedInertiaShift(mass_kg, BodyParameters::FromVector(chi), direction);
+    if (body.empty()) return {0.0, 0.0};
+    range = {std::max(range.low, body.low), std::min(range.high, body.high)};
+  }
+  return range;
+}
+
+}  // namespace
+
+void SetAllowedRanges(const IdimLayout& layout, const std::map<std::string, double>& mass_kg, TlsSolution* solution) {
+  const Eigen::Index p = layout.num_parameters();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  solution->allowed_low = solution->allowed_high = solution->within_range_chi = Eigen::VectorXd::Constant(p, nan);
+  Eigen::VectorXd predicted = PredictionChi(*solution);
+  for (const std::string& config : layout.config_names) {
+    const auto mass = mass_kg.find(config);
+    if (mass == mass_kg.end()) continue;
+    std::vector<int> first_moments;  // the ms_x column of each body
+    for (int k = 0; k < p; ++k) {
+      const std::string& name = layout.parameter_names[k];
+      if (name.compare(0, config.size() + 1, config + ".") == 0 && EndsWith(name, ".ms_x")) first_moments.push_back(k);
+    }
+    std::array<int, 6> inertia;
+    for (int k = 0; k < 6; ++k) inertia[k] = layout.Column(config + "." + kBodyParameterNames[3 + k]);
+    if (first_moments.empty() || *std::min_element(inertia.begin(), inertia.end()) < 0) continue;
+    std::array<bool, 3> has_value{};  // an estimate, or a value the joint shift below gave
+    Eigen::Matrix3d discarded = Eigen::Matrix3d::Zero();
+    for (int axis = 0; axis < 3; ++axis) {
+      has_value[axis] = PredictsWithProfiled(*solution, inertia[axis]);
+      if (!solution->essential[inertia[axis]]) discarded(axis, axis) = 1.0;
+    }
+    // Several discarded entries can each have no range with the others as predicted (NanoBench: I_xx
+    // and I_yy profiled at 3.4e-6 and 4.0e-6, I_zz held at 0, the centre of mass 23 mm below O_d):
+    // first raised together, by the smallest shift that makes every body physical.
+    if (discarded.trace() >= 2.0 && CommonShift(mass->second, first_moments, inertia, predicted, discarded).low > 0.0) {
+      const InertiaRange shift = CommonShift(mass->second, first_moments, inertia, predicted, discarded);
+      if (!shift.empty())
+        for (int axis = 0; axis < 3; ++axis)
+          if (discarded(axis, axis) > 0.0) {
+            predicted[inertia[axis]] += shift.low + 0.01 * (shift.high - shift.low);
+            has_value[axis] = true;
+          }
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      const int k = inertia[axis];
+      if (solution->essential[k]) continue;
+      Eigen::Matrix3d direction = Eigen::Matrix3d::Zero();
+      direction(axis, axis) = 1.0;
+      const double value = predicted[k];
+      predicted[k] = 0.0;
+      const InertiaRange range = CommonShift(mass->second, first_moments, inertia, predicted, direction);
+      predicted[k] = value;
+      if (range.empty()) continue;  // the others make it no body whatever its value: physical_consistency says so
+      solution->allowed_low[k] = range.low;
+      solution->allowed_high[k] = range.high;
+      const double margin = 0.01 * (range.high - range.low);
+      predicted[k] = has_value[axis] ? std::clamp(value, range.low + margin, range.high - margin)
+                                     : 0.5 * (range.low + range.high);
+    }
+  }
+  const Eigen::VectorXd original = PredictionChi(*solution);
+  for (Eigen::Index k = 0; k < p; ++k)
+    if (predicted[k] != original[k]) solution->within_range_chi[k] = predicted[k];
+}
 
 std::vector<BodyAssessment> AssessBodies(const CheckedParameters& p) {
   std::vector<BodyAssessment> out;

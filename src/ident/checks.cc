@@ -319,13 +319,17 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
 
 CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolution& solution) {
   CheckedParameters p;
+  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (int k = 0; k < system.num_parameters(); ++k) {
     const std::string& name = system.parameter_names[k];
     p.value[name] = solution.chi[k];
     p.std[name] = solution.std[k];
     p.essential[name] = solution.essential[k];
-    if (PredictsWithProfiled(solution, k)) {
-      p.predicts_with[name] = solution.profiled_chi[k];
+    if (solution.PredictsWithinRange(k)) {  // a value a body allows, not an estimate: no std
+      p.predicts_with[name] = predicted[k];
+      p.predicts_with_std[name] = 0.0;
+    } else if (PredictsWithProfiled(solution, k)) {
+      p.predicts_with[name] = predicted[k];
       p.predicts_with_std[name] = solution.profiled_std[k];
     }
   }

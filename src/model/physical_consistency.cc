@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
@@ -110,6 +111,53 @@ PhysicalConsistency CheckPhysicalConsistency(double mass_kg, const BodyParameter
                      ShortNumber(result.principal_moments_at_com[2]) + " kg m^2";
   }
   return result;
+}
+
+InertiaRange AllowedInertiaShift(double mass_kg, const BodyParameters& body, const Eigen::Matrix3d& direction) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!(mass_kg > 0.0) || !body.first_moment.allFinite() || !body.inertia.allFinite()) return {nan, nan};
+  // The smallest second moment about the centre of mass is concave in t (the smallest eigenvalue of a
+  // matrix affine in it): its maximum by golden section, the two roots by bisection.
+  const auto smallest = [&](double t) {
+    BodyParameters b = body;
+    b.inertia += t * direction;
+    return CheckPhysicalConsistency(mass_kg, b, 0.0).second_moments_at_com[0];
+  };
+  // Beyond this shift some second moment is negative whatever the rest: a generous bound.
+  const double upper = 2.0 * (body.inertia.cwiseAbs().sum() + body.first_moment.squaredNorm() / mass_kg) /
+                       std::max(direction.cwiseAbs().maxCoeff(), 1e-300);
+  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
+  double a = 0.0, b = upper;
+  for (int i = 0; i < 200 && b - a > 1e-15 * upper; ++i) {
+    const double x1 = b - golden * (b - a), x2 = a + golden * (b - a);
+    if (smallest(x1) < smallest(x2))
+      a = x1;
+    else
+      b = x2;
+  }
+  const double peak = 0.5 * (a + b);
+  if (!(smallest(peak) > 0.0)) return {nan, nan};
+  // The root between `outside` (not a body, or the end of the search) and `inside` (a body).
+  const auto root = [&](double outside, double inside) {
+    if (smallest(outside) > 0.0) return outside;
+    for (int i = 0; i < 200 && std::abs(inside - outside) > 1e-15 * upper; ++i) {
+      const double middle = 0.5 * (outside + inside);
+      if (smallest(middle) > 0.0)
+        inside = middle;
+      else
+        outside = middle;
+    }
+    return 0.5 * (outside + inside);
+  };
+  return {root(0.0, peak), root(upper, peak)};
+}
+
+InertiaRange AllowedDiagonalInertia(double mass_kg, const BodyParameters& body, int axis) {
+  BodyParameters without = body;
+  without.inertia(axis, axis) = 0.0;
+  Eigen::Matrix3d direction = Eigen::Matrix3d::Zero();
+  direction(axis, axis) = 1.0;
+  return AllowedInertiaShift(mass_kg, without, direction);
 }
 
 Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const BodyParameters& body) {

@@ -27,6 +27,7 @@ ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names,
 
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
   nlohmann::json out = nlohmann::json::object();
+  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (size_t k = 0; k < names.size(); ++k) {
     const ParameterStatistics p = ParameterStatisticsOf(names, solution, k);
     nlohmann::json entry = {{"value", JsonNumber(p.value)},
@@ -40,8 +41,12 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
     }
     // A discarded parameter the model still estimates and predicts with (PredictionChi): validate
     // predicts with it too.
-    if (PredictsWithProfiled(solution, static_cast<int>(k)))
-      entry["predicts_with"] = JsonNumber(solution.profiled_chi[static_cast<Eigen::Index>(k)]);
+    const int i = static_cast<int>(k);
+    if (PredictsWithProfiled(solution, i) || solution.PredictsWithinRange(i))
+      entry["predicts_with"] = JsonNumber(predicted[i]);
+    // The values a physical body allows a discarded inertia (the others as predicted with).
+    if (solution.HasAllowedRange(i))
+      entry["allowed_range"] = {JsonNumber(solution.allowed_low[i]), JsonNumber(solution.allowed_high[i])};
     out[names[k]] = entry;
   }
   return out;

@@ -173,5 +173,26 @@ TEST(ConsistentProjectionTest, AConsistentEstimateIsItsOwnProjection) {
   EXPECT_EQ((projection.body.ToVector() - box.ToVector()).norm(), 0.0);
 }
 
+// Centred at O_d, the triangle inequality is the whole range: |I_xx - I_yy| <= I_zz <= I_xx + I_yy.
+// Off the origin it narrows by the centre of mass's offsets.
+TEST(AllowedDiagonalInertiaTest, IsTheTriangleInequalityForACentredBody) {
+  BodyParameters body;
+  body.inertia = Eigen::Vector3d(0.018, 0.019, 0.0).asDiagonal();
+  const InertiaRange range = AllowedDiagonalInertia(1.285, body, 2);
+  EXPECT_NEAR(range.low, 0.001, 1e-12);
+  EXPECT_NEAR(range.high, 0.037, 1e-12);
+  // A centre of mass 10 mm below O_d moves I_xx and I_yy at O_d up by m c_z^2 but not I_zz.
+  const double shift = 1.285 * 0.01 * 0.01;
+  BodyParameters below;
+  below.first_moment = Eigen::Vector3d(0.0, 0.0, -1.285 * 0.01);
+  below.inertia = Eigen::Vector3d(0.018 + shift, 0.019 + shift, 0.0).asDiagonal();
+  const InertiaRange offset = AllowedDiagonalInertia(1.285, below, 2);
+  EXPECT_NEAR(offset.low, 0.001, 1e-12);
+  EXPECT_NEAR(offset.high, 0.037, 1e-12);
+  // A roll inertia smaller than m c_z^2 leaves no value of I_zz that makes a body.
+  below.inertia(0, 0) = 0.5 * shift;
+  EXPECT_TRUE(AllowedDiagonalInertia(1.285, below, 2).empty());
+}
+
 }  // namespace
 }  // namespace rotorid

@@ -27,6 +27,14 @@ struct BodyAssessment {
   std::string cause;  // why it is not a body, in words; empty when it is
 };
 
+// Step 3 of issue 37: for each discarded diagonal inertia entry (I_xx, I_yy, I_zz in turn, each with
+// the others at what the model predicts with) of each configuration in `mass_kg`, the range with which
+// every body of the configuration is physical (solution->allowed_low/high), and, where the value
+// PredictionChi would take lies outside it (1 % of its width kept clear of the ends) or the entry has
+// no estimate, the value to predict with instead (within_range_chi): the estimate clamped into the
+// range, or its middle. Called by identify and refine on every solution they return.
+void SetAllowedRanges(const IdimLayout& layout, const std::map<std::string, double>& mass_kg, TlsSolution* solution);
+
 // One assessment per body of each configuration in p.mass_kg, in the configurations' order of
 // p.mass_kg and the first moments' order of their names.
 std::vector<BodyAssessment> AssessBodies(const CheckedParameters& p);

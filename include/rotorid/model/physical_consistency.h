@@ -46,6 +46,18 @@ struct PhysicalConsistency {
 PhysicalConsistency CheckPhysicalConsistency(double mass_kg, const BodyParameters& body,
                                              double relative_tolerance = 1e-9);
 
+// The values of the diagonal inertia entry I(axis, axis) (kg m^2) with which the body is consistent,
+// the other parameters held: an interval, since the consistent set is convex (I_zz between
+// |I_xx - I_yy| and I_xx + I_yy for a body centred at O_d). {NaN, NaN} when no value makes it a body.
+struct InertiaRange {
+  double low = 0.0;
+  double high = 0.0;
+  bool empty() const { return !(high > low); }
+};
+InertiaRange AllowedDiagonalInertia(double mass_kg, const BodyParameters& body, int axis);
+// The values t >= 0 with which the body with inertia I + t `direction` is consistent (an interval).
+InertiaRange AllowedInertiaShift(double mass_kg, const BodyParameters& body, const Eigen::Matrix3d& direction);
+
 // The log-Cholesky parameterisation of J (Rucker and Wensing, "Smooth parameterization of rigid-body
 // inertia", RA-L 2022): J = U U^T with U upper triangular,
 //
