@@ -172,16 +172,16 @@ void SetAllowedRanges(const IdimLayout& layout, const std::map<std::string, doub
     }
     // Several discarded entries can each have no range with the others as predicted (NanoBench: I_xx
     // and I_yy profiled at 3.4e-6 and 4.0e-6, I_zz held at 0, the centre of mass 23 mm below O_d):
-    // first raised together, by the smallest shift that makes every body physical.
-    if (discarded.trace() >= 2.0 && CommonShift(mass->second, first_moments, inertia, predicted, discarded).low > 0.0) {
-      const InertiaRange shift = CommonShift(mass->second, first_moments, inertia, predicted, discarded);
-      if (!shift.empty())
-        for (int axis = 0; axis < 3; ++axis)
-          if (discarded(axis, axis) > 0.0) {
-            predicted[inertia[axis]] += shift.low + 0.01 * (shift.high - shift.low);
-            has_value[axis] = true;
-          }
-    }
+    // first raised together, 10 % beyond the smallest shift that makes every body physical.
+    const InertiaRange shift = discarded.trace() >= 2.0
+                                   ? CommonShift(mass->second, first_moments, inertia, predicted, discarded)
+                                   : InertiaRange{0.0, 0.0};
+    if (!shift.empty() && shift.low > 0.0)
+      for (int axis = 0; axis < 3; ++axis)
+        if (discarded(axis, axis) > 0.0) {
+          predicted[inertia[axis]] += std::min(1.1 * shift.low, 0.5 * (shift.low + shift.high));
+          has_value[axis] = true;
+        }
     for (int axis = 0; axis < 3; ++axis) {
       const int k = inertia[axis];
       if (solution->essential[k]) continue;
@@ -216,17 +216,21 @@ std::vector<BodyAssessment> AssessBodies(const CheckedParameters& p) {
       a.config = config;
       a.mass_kg = mass;
       const std::array<std::string, kNumBodyParameters> names = BodyNames(a.name, config);
-      Eigen::Matrix<double, kNumBodyParameters, 1> chi, std_dev;
+      Eigen::Matrix<double, kNumBodyParameters, 1> chi, estimate, std_dev;
       for (int k = 0; k < kNumBodyParameters; ++k) {
-        chi[k] = Predicted(p, names[k]);
+        chi[k] = estimate[k] = Predicted(p, names[k]);
         std_dev[k] = PredictedStd(p, names[k]);
+        if (!Essential(p, names[k]) && p.profiled.count(names[k])) {
+          estimate[k] = p.profiled.at(names[k]);
+          std_dev[k] = Lookup(p.profiled_std, names[k]);
+        }
       }
       a.predicted = BodyParameters::FromVector(chi);
+      a.estimate = BodyParameters::FromVector(estimate);
       a.consistency = CheckPhysicalConsistency(mass, a.predicted);
       const Eigen::MatrixXd sqrt_information = SqrtInformation(p, names, std_dev);
-      a.has_projection = sqrt_information.rows() > 0 && a.predicted.ToVector().allFinite();
-      if (a.has_projection)
-        a.projection = ProjectOntoConsistentBodies(mass, a.predicted, sqrt_information, std_dev);
+      a.has_projection = sqrt_information.rows() > 0 && estimate.allFinite();
+      if (a.has_projection) a.projection = ProjectOntoConsistentBodies(mass, a.estimate, sqrt_information, std_dev);
       if (!a.consistency.consistent) a.cause = CauseOf(p, a, names);
       out.push_back(std::move(a));
     }
@@ -239,19 +243,9 @@ std::vector<Check> PhysicalConsistencyChecks(const CheckedParameters& p, const s
   for (const BodyAssessment& a : AssessBodies(p)) {
     const PhysicalConsistency& c = a.consistency;
     const std::string name = label + " " + a.name;
-    if (c.consistent) {
-      const Eigen::Vector3d com = 1e3 * c.centre_of_mass_m;
-      checks.push_back({"physical_consistency", CheckStatus::kOk,
-                        name + ": a physically possible body with the values it predicts with: centre of mass (" +
-                            ShortNumber(com.x()) + ", " + ShortNumber(com.y()) + ", " + ShortNumber(com.z()) +
-                            ") mm, inertia about it " + ShortNumber(c.principal_moments_at_com[0]) + ", " +
-                            ShortNumber(c.principal_moments_at_com[1]) + ", " +
-                            ShortNumber(c.principal_moments_at_com[2]) + " kg m^2"});
-      continue;
-    }
+    const ConsistentProjection& q = a.projection;
     std::string distance;
-    if (a.has_projection) {
-      const ConsistentProjection& q = a.projection;
+    if (a.has_projection && q.distance_std > 0.0)
       distance = "; the nearest physical body lies " + ShortNumber(q.distance_std) +
                  " std from the estimate (Mahalanobis" +
                  (q.largest_move_parameter >= 0 ? std::string(", most in ") +
@@ -259,10 +253,24 @@ std::vector<Check> PhysicalConsistencyChecks(const CheckedParameters& p, const s
                                                       ShortNumber(q.largest_move_std) + " std"
                                                 : std::string()) +
                  ")";
+    if (!c.consistent) {
+      checks.push_back({"physical_consistency", CheckStatus::kError,
+                        name + ": the values it predicts with are no physical body (" + c.problem +
+                            "); likely cause: " + a.cause + distance});
+      continue;
     }
-    checks.push_back({"physical_consistency", CheckStatus::kError,
-                      name + ": the values it predicts with are no physical body (" + c.problem +
-                          "); likely cause: " + a.cause + distance});
+    const Eigen::Vector3d com = 1e3 * c.centre_of_mass_m;
+    const bool far = a.has_projection && q.distance_std > kFarFromABodyStd;
+    checks.push_back(
+        {"physical_consistency", far ? CheckStatus::kWarning : CheckStatus::kOk,
+         name + ": a physically possible body with the values it predicts with: centre of mass (" +
+             ShortNumber(com.x()) + ", " + ShortNumber(com.y()) + ", " + ShortNumber(com.z()) +
+             ") mm, inertia about it " + ShortNumber(c.principal_moments_at_com[0]) + ", " +
+             ShortNumber(c.principal_moments_at_com[1]) + ", " + ShortNumber(c.principal_moments_at_com[2]) +
+             " kg m^2" + distance +
+             (far ? ": the discarded inertias are predicted within the range a body allows, but the estimate is "
+                    "no body; the flights or the model (mass, geometry, an unmodelled effect) are wrong"
+                  : "")});
   }
   return checks;
 }

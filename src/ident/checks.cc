@@ -325,6 +325,10 @@ CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolutio
     p.value[name] = solution.chi[k];
     p.std[name] = solution.std[k];
     p.essential[name] = solution.essential[k];
+    if (solution.Profiled(k)) {
+      p.profiled[name] = solution.profiled_chi[k];
+      p.profiled_std[name] = solution.profiled_std[k];
+    }
     if (solution.PredictsWithinRange(k)) {  // a value a body allows, not an estimate: no std
       p.predicts_with[name] = predicted[k];
       p.predicts_with_std[name] = 0.0;

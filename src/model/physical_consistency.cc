@@ -58,10 +58,11 @@ struct ProjectionResidual {
 };
 
 // A consistent body near an inconsistent one: its centre of mass, and its second moments about it
-// raised to at least `relative_floor` times the largest (a body with none positive gets 1 cm RMS).
+// raised to at least `relative_floor` times the largest, and to an RMS extent of at least 1 mm (a body
+// with every inertia discarded and held at 0 has none).
 BodyParameters RepairedBody(double mass_kg, const PhysicalConsistency& check, double relative_floor) {
   const Eigen::Vector3d sigma = check.second_moments_at_com;
-  const double floor = sigma[2] > 0.0 ? relative_floor * sigma[2] : 1e-4 * mass_kg;
+  const double floor = std::max(relative_floor * sigma[2], 1e-6 * mass_kg);
   const Eigen::Vector3d raised = sigma.cwiseMax(floor);
   const Eigen::Matrix3d sigma_c = check.principal_axes * raised.asDiagonal() * check.principal_axes.transpose();
   return BodyOfSecondMoments(mass_kg, check.centre_of_mass_m, sigma_c);
@@ -123,8 +124,9 @@ InertiaRange AllowedInertiaShift(double mass_kg, const BodyParameters& body, con
     b.inertia += t * direction;
     return CheckPhysicalConsistency(mass_kg, b, 0.0).second_moments_at_com[0];
   };
-  // Beyond this shift some second moment is negative whatever the rest: a generous bound.
-  const double upper = 2.0 * (body.inertia.cwiseAbs().sum() + body.first_moment.squaredNorm() / mass_kg) /
+  // The search's end: beyond it some second moment is negative whatever the rest, or (a direction that
+  // raises every moment) the body has an RMS extent of metres.
+  const double upper = (2.0 * (body.inertia.cwiseAbs().sum() + body.first_moment.squaredNorm() / mass_kg) + mass_kg) /
                        std::max(direction.cwiseAbs().maxCoeff(), 1e-300);
   const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
   double a = 0.0, b = upper;
@@ -195,7 +197,12 @@ ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParam
     out.converged = false;
     return out;
   }
-  const Eigen::Matrix<double, kNumLogCholesky, 1> start = LogCholeskyOf(mass_kg, RepairedBody(mass_kg, check, 1e-3));
+  const BodyParameters repaired = RepairedBody(mass_kg, check, 1e-3);
+  if (!CheckPhysicalConsistency(mass_kg, repaired).consistent) {
+    out.converged = false;
+    return out;
+  }
+  const Eigen::Matrix<double, kNumLogCholesky, 1> start = LogCholeskyOf(mass_kg, repaired);
   double free_theta[kNumLogCholesky - 1];
   for (int k = 1; k < kNumLogCholesky; ++k) free_theta[k - 1] = start[k];
   const auto rows = static_cast<int>(sqrt_information.rows());

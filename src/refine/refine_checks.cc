@@ -45,12 +45,7 @@ void Append(std::vector<Check>* to, std::vector<Check> from) {
 // std is 0 meaning "not known", not "exactly determined"; the confounded coordinates are named.
 std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, const RefineResult& refined,
                                           const std::string& label) {
-  CheckedParameters parameters = CheckedFromSolution(linear, refined.refined);
-  if (!refined.has_covariance) {
-    parameters.std.clear();
-    parameters.predicts_with_std.clear();
-    parameters.covariance_names.clear();
-  }
+  const CheckedParameters parameters = CheckedFromRefinement(linear, refined);
   std::vector<Check> checks = CheckParameters(parameters, linear.system.config_names, label);
   if (refined.rank_deficient) {
     const std::string names = Join(refined.confounded);
@@ -86,6 +81,17 @@ void ExcuseLinearRelativeError(const IdentificationResult& linear, const RefineR
 }
 
 }  // namespace
+
+CheckedParameters CheckedFromRefinement(const IdentificationResult& linear, const RefineResult& refined) {
+  CheckedParameters parameters = CheckedFromSolution(linear, refined.refined);
+  if (!refined.has_covariance) {
+    parameters.std.clear();
+    parameters.predicts_with_std.clear();
+    parameters.profiled_std.clear();
+    parameters.covariance_names.clear();
+  }
+  return parameters;
+}
 
 std::vector<Check> CheckRefinement(const IdentificationResult& linear, const RefineResult& refined,
                                    const std::string& label, CheckStatus on_bound_status) {

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "rotorid/core/error.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/parameters.h"
 
@@ -48,6 +49,29 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
     if (solution.HasAllowedRange(i))
       entry["allowed_range"] = {JsonNumber(solution.allowed_low[i]), JsonNumber(solution.allowed_high[i])};
     out[names[k]] = entry;
+  }
+  return out;
+}
+
+nlohmann::json BodiesJson(const CheckedParameters& parameters) {
+  nlohmann::json out = nlohmann::json::array();
+  const auto vector = [](const Eigen::Vector3d& v) { return VectorJson(v); };
+  for (const BodyAssessment& a : AssessBodies(parameters)) {
+    const PhysicalConsistency& c = a.consistency;
+    nlohmann::json body = {{"body", a.name},
+                           {"consistent", c.consistent},
+                           {"centre_of_mass_m", vector(c.centre_of_mass_m)},
+                           {"principal_moments_at_com", vector(c.principal_moments_at_com)},
+                           {"rms_extent_m", vector(c.rms_extent_m)},
+                           {"distance_std", a.has_projection ? JsonNumber(a.projection.distance_std) : nullptr}};
+    if (!c.consistent) body["cause"] = a.cause;
+    if (a.has_projection && a.projection.distance_std > 0.0) {
+      nlohmann::json nearest = nlohmann::json::object();
+      const Eigen::Matrix<double, kNumBodyParameters, 1> chi = a.projection.body.ToVector();
+      for (int k = 0; k < kNumBodyParameters; ++k) nearest[kBodyParameterNames[k]] = JsonNumber(chi[k]);
+      body["nearest_consistent"] = nearest;
+    }
+    out.push_back(body);
   }
   return out;
 }
@@ -124,6 +148,7 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
   for (const FlightFit& fit : result.per_flight) flights.push_back(FlightFitJson(fit));
   return {{"method", TlsMethodName(s.method)},
           {"parameters", ParametersJson(result.system.parameter_names, s)},
+          {"bodies", BodiesJson(CheckedFromSolution(result, s))},
           {"relative_error_pct", ComponentsJson(result.relative_error_pct)},
           {"discarded", discarded},
           {"flights", flights},

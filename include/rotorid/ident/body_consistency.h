@@ -20,8 +20,11 @@ struct BodyAssessment {
   double mass_kg = 0.0;
   BodyParameters predicted;  // the values the model predicts with
   PhysicalConsistency consistency;
-  // The nearest consistent body in the estimate's metric (its std, and covariance where known);
-  // the predicted body itself, at distance 0, when that is consistent. Not computed without a std.
+  // The estimate: the essential values and the discarded parameters' estimates beside them (profiled),
+  // whatever the model predicts with; a discarded parameter without one is free.
+  BodyParameters estimate;
+  // The physical body nearest to the estimate in its metric (its std, and covariance where known),
+  // and the distance (std): 0 when the estimate is a body. Not computed without a std.
   bool has_projection = false;
   ConsistentProjection projection;
   std::string cause;  // why it is not a body, in words; empty when it is
@@ -41,7 +44,10 @@ std::vector<BodyAssessment> AssessBodies(const CheckedParameters& p);
 
 // `physical_consistency`, one per body: ok with the centre of mass and the inertia about it, or an
 // error naming the cause (a discarded inertia, a first moment the flights do not fix, a wrong mass or
-// geometry) and the distance to the nearest consistent body. `label` names the model ("linear").
+// geometry) and the distance to the nearest consistent body. A body the model predicts with but the
+// estimate is not (its discarded inertias moved into the range a body allows) is a warning when the
+// estimate lies more than kFarFromABodyStd from every body. `label` names the model ("linear").
+inline constexpr double kFarFromABodyStd = 3.0;
 std::vector<Check> PhysicalConsistencyChecks(const CheckedParameters& p, const std::string& label);
 
 }  // namespace rotorid

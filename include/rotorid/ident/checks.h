@@ -67,6 +67,11 @@ struct CheckedParameters {
   // profiled estimate), with its std.
   std::map<std::string, double> predicts_with;
   std::map<std::string, double> predicts_with_std;
+  // A discarded parameter's estimate beside the others (TlsSolution::profiled_chi) and its std, where
+  // the model predicts with another value (a range a body allows) or none: the estimate's distance to
+  // the physical bodies counts it.
+  std::map<std::string, double> profiled;
+  std::map<std::string, double> profiled_std;
   // The covariance of the values named in covariance_names (empty: only the std is known): the
   // metric of the projection onto the consistent bodies.
   std::vector<std::string> covariance_names;
