@@ -47,6 +47,7 @@ Eigen::MatrixXd SqrtInformation(const CheckedParameters& p, const std::array<std
   for (int k = 0; k < kNumBodyParameters; ++k)
     if (std_dev[k] > 0.0 && std::isfinite(std_dev[k])) known.push_back(k);
   const auto n = static_cast<Eigen::Index>(known.size());
+  if (n == 0) return Eigen::MatrixXd(0, kNumBodyParameters);
   Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
   std::vector<int> column(kNumBodyParameters, -1);
   for (int k = 0; k < kNumBodyParameters; ++k) {
@@ -65,7 +66,7 @@ Eigen::MatrixXd SqrtInformation(const CheckedParameters& p, const std::array<std
   // Cov^(-1/2) through its eigenvalues: a nearly singular block (two parameters the flights only fix as
   // a sum) keeps the directions it knows.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(covariance);
-  const double largest = n > 0 ? eigen.eigenvalues().maxCoeff() : 0.0;
+  const double largest = eigen.eigenvalues().maxCoeff();
   Eigen::VectorXd inverse_sqrt = Eigen::VectorXd::Zero(n);
   for (Eigen::Index a = 0; a < n; ++a)
     if (eigen.eigenvalues()[a] > 1e-14 * largest) inverse_sqrt[a] = 1.0 / std::sqrt(eigen.eigenvalues()[a]);
@@ -87,12 +88,11 @@ std::string CauseOf(const CheckedParameters& p, const BodyAssessment& a,
   std::string discarded;
   for (int k = 3; k < 6; ++k)
     if (!Essential(p, names[k]))
-      discarded += (discarded.empty() ? "" : ", ") + std::string(kBodyParameterNames[k]) +
-                   (p.predicts_with.count(names[k]) ? " (predicted with its estimate " +
-                                                          ValueWithStd(Predicted(p, names[k]),
-                                                                       PredictedStd(p, names[k])) +
-                                                          ")"
-                                                    : " (held at 0)");
+      discarded +=
+          (discarded.empty() ? "" : ", ") + std::string(kBodyParameterNames[k]) +
+          (p.predicts_with.count(names[k]) ? " (predicted with its estimate " +
+                                                 ValueWithStd(Predicted(p, names[k]), PredictedStd(p, names[k])) + ")"
+                                           : " (held at 0)");
   if (!discarded.empty())
     causes.push_back("a discarded inertia the flights do not fix: " + discarded +
                      (p.value.count(names[5]) && !Essential(p, names[5])
@@ -195,8 +195,8 @@ void SetAllowedRanges(const IdimLayout& layout, const std::map<std::string, doub
       solution->allowed_low[k] = range.low;
       solution->allowed_high[k] = range.high;
       const double margin = 0.01 * (range.high - range.low);
-      predicted[k] = has_value[axis] ? std::clamp(value, range.low + margin, range.high - margin)
-                                     : 0.5 * (range.low + range.high);
+      predicted[k] =
+          has_value[axis] ? std::clamp(value, range.low + margin, range.high - margin) : 0.5 * (range.low + range.high);
     }
   }
   const Eigen::VectorXd original = PredictionChi(*solution);
@@ -230,7 +230,8 @@ std::vector<BodyAssessment> AssessBodies(const CheckedParameters& p) {
       a.consistency = CheckPhysicalConsistency(mass, a.predicted);
       const Eigen::MatrixXd sqrt_information = SqrtInformation(p, names, std_dev);
       a.has_projection = sqrt_information.rows() > 0 && estimate.allFinite();
-      if (a.has_projection) a.projection = ProjectOntoConsistentBodies(mass, a.estimate, sqrt_information, std_dev);
+      if (a.has_projection)
+        a.projection = ProjectOntoConsistentBodies(mass, a.estimate, sqrt_information, std_dev, &a.predicted);
       if (!a.consistency.consistent) a.cause = CauseOf(p, a, names);
       out.push_back(std::move(a));
     }
@@ -246,13 +247,12 @@ std::vector<Check> PhysicalConsistencyChecks(const CheckedParameters& p, const s
     const ConsistentProjection& q = a.projection;
     std::string distance;
     if (a.has_projection && q.distance_std > 0.0)
-      distance = "; the nearest physical body lies " + ShortNumber(q.distance_std) +
-                 " std from the estimate (Mahalanobis" +
-                 (q.largest_move_parameter >= 0 ? std::string(", most in ") +
-                                                      kBodyParameterNames[q.largest_move_parameter] + ": " +
-                                                      ShortNumber(q.largest_move_std) + " std"
-                                                : std::string()) +
-                 ")";
+      distance =
+          "; the nearest physical body lies " + ShortNumber(q.distance_std) + " std from the estimate (Mahalanobis" +
+          (q.largest_move_parameter >= 0 ? std::string(", most in ") + kBodyParameterNames[q.largest_move_parameter] +
+                                               ": " + ShortNumber(q.largest_move_std) + " std"
+                                         : std::string()) +
+          ")";
     if (!c.consistent) {
       checks.push_back({"physical_consistency", CheckStatus::kError,
                         name + ": the values it predicts with are no physical body (" + c.problem +

@@ -538,9 +538,8 @@ void ExcuseLinearParameterErrors(const std::vector<Check>& linear, const std::ve
   std::map<std::string, int> seen;
   for (const Check& failed : linear) {
     const int n = seen[failed.name]++;
-    if (failed.status != CheckStatus::kError ||
-        (failed.name != "kt_positive" && failed.name != "kd_positive" && failed.name != "inertia" &&
-         failed.name != "physical_consistency"))
+    if (failed.status != CheckStatus::kError || (failed.name != "kt_positive" && failed.name != "kd_positive" &&
+                                                 failed.name != "inertia" && failed.name != "physical_consistency"))
       continue;
     const Check* passed = nth(with_effects, failed.name, n);
     if (!passed || passed->status != CheckStatus::kOk) continue;
@@ -570,8 +569,7 @@ IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const I
     if (!AnyCheckFailed(*checks)) throw;
     throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(*checks));
   }
-  for (Check& c :
-       CheckParameters(CheckedFromSolution(result, result.solution), result.system.config_names, "linear"))
+  for (Check& c : CheckParameters(CheckedFromSolution(result, result.solution), result.system.config_names, "linear"))
     checks->push_back(std::move(c));
   for (Check& c : CheckRelativeError(result.relative_error_pct, "linear", /*held_out=*/false))
     checks->push_back(std::move(c));

@@ -186,7 +186,8 @@ Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const Bo
 
 ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParameters& estimate,
                                                  const Eigen::MatrixXd& sqrt_information,
-                                                 const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev) {
+                                                 const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
+                                                 const BodyParameters* start_body) {
   if (sqrt_information.cols() != kNumBodyParameters)
     throw Error("ProjectOntoConsistentBodies: the information factor needs one column per body parameter");
   ConsistentProjection out;
@@ -197,7 +198,8 @@ ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParam
     out.converged = false;
     return out;
   }
-  const BodyParameters repaired = RepairedBody(mass_kg, check, 1e-3);
+  const bool start_given = start_body && CheckPhysicalConsistency(mass_kg, *start_body).consistent;
+  const BodyParameters repaired = start_given ? *start_body : RepairedBody(mass_kg, check, 1e-3);
   if (!CheckPhysicalConsistency(mass_kg, repaired).consistent) {
     out.converged = false;
     return out;
@@ -207,10 +209,9 @@ ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParam
   for (int k = 1; k < kNumLogCholesky; ++k) free_theta[k - 1] = start[k];
   const auto rows = static_cast<int>(sqrt_information.rows());
   ceres::Problem problem;
-  problem.AddResidualBlock(
-      new ceres::AutoDiffCostFunction<ProjectionResidual, ceres::DYNAMIC, kNumLogCholesky - 1>(
-          new ProjectionResidual{start[0], estimate.ToVector(), sqrt_information}, rows),
-      nullptr, free_theta);
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ProjectionResidual, ceres::DYNAMIC, kNumLogCholesky - 1>(
+                               new ProjectionResidual{start[0], estimate.ToVector(), sqrt_information}, rows),
+                           nullptr, free_theta);
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = 500;

@@ -11,12 +11,12 @@ namespace {
 // O_d (ms_z at 3 std) with a small roll inertia at O_d.
 CheckedParameters NanoBenchLike() {
   CheckedParameters p;
-  p.value = {{"kt", 1.9e-8},          {"kd", 1.0e-10},       {"CF.ms_x", 1e-5},   {"CF.ms_y", -2e-5},
-             {"CF.ms_z", -9.5e-4},    {"CF.I_xx", 1.6e-5},   {"CF.I_yy", 2.6e-5}, {"CF.I_zz", 2.9e-5},
-             {"CF.I_xy", 0.0},        {"CF.I_xz", 0.0},      {"CF.I_yz", 0.0}};
-  p.std = {{"kt", 1e-11},      {"kd", 1e-12},      {"CF.ms_x", 2e-5},   {"CF.ms_y", 2e-5},
-           {"CF.ms_z", 3.2e-4}, {"CF.I_xx", 1e-6},  {"CF.I_yy", 1e-6},   {"CF.I_zz", 2e-6},
-           {"CF.I_xy", 5e-7},   {"CF.I_xz", 5e-7},  {"CF.I_yz", 5e-7}};
+  p.value = {{"kt", 1.9e-8},       {"kd", 1.0e-10},     {"CF.ms_x", 1e-5},   {"CF.ms_y", -2e-5},
+             {"CF.ms_z", -9.5e-4}, {"CF.I_xx", 1.6e-5}, {"CF.I_yy", 2.6e-5}, {"CF.I_zz", 2.9e-5},
+             {"CF.I_xy", 0.0},     {"CF.I_xz", 0.0},    {"CF.I_yz", 0.0}};
+  p.std = {{"kt", 1e-11},       {"kd", 1e-12},     {"CF.ms_x", 2e-5}, {"CF.ms_y", 2e-5},
+           {"CF.ms_z", 3.2e-4}, {"CF.I_xx", 1e-6}, {"CF.I_yy", 1e-6}, {"CF.I_zz", 2e-6},
+           {"CF.I_xy", 5e-7},   {"CF.I_xz", 5e-7}, {"CF.I_yz", 5e-7}};
   for (const auto& [name, value] : p.value) p.essential[name] = true;
   p.mass_kg = {{"CF", 0.04085}};
   return p;
@@ -54,6 +54,13 @@ TEST(BodyConsistencyTest, APossibleBodyPassesAndAModelWithoutMassIsNotChecked) {
   ASSERT_NE(check, nullptr);
   EXPECT_EQ(check->status, CheckStatus::kOk) << check->message;
   EXPECT_NE(check->message.find("centre of mass (0.245, -0.49, -5) mm"), std::string::npos) << check->message;
+  // Without a std (validate reads values only) there is no metric: the check without the distance.
+  CheckedParameters values_only = NanoBenchLike();
+  values_only.std.clear();
+  const std::vector<BodyAssessment> bodies = AssessBodies(values_only);
+  ASSERT_EQ(bodies.size(), 1u);
+  EXPECT_FALSE(bodies[0].consistency.consistent);
+  EXPECT_FALSE(bodies[0].has_projection);
   p.mass_kg.clear();
   EXPECT_TRUE(PhysicalConsistencyChecks(p, "linear").empty());
 }

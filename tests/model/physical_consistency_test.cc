@@ -166,7 +166,8 @@ TEST(ConsistentProjectionTest, FindsTheNearestConsistentBodyInTheEstimatesMetric
 
 TEST(ConsistentProjectionTest, AConsistentEstimateIsItsOwnProjection) {
   const BodyParameters box = TiltedBox();
-  const Eigen::Matrix<double, kNumBodyParameters, 1> std_dev = Eigen::Matrix<double, kNumBodyParameters, 1>::Constant(1e-4);
+  const Eigen::Matrix<double, kNumBodyParameters, 1> std_dev =
+      Eigen::Matrix<double, kNumBodyParameters, 1>::Constant(1e-4);
   const ConsistentProjection projection =
       ProjectOntoConsistentBodies(0.7, box, std_dev.cwiseInverse().asDiagonal(), std_dev);
   EXPECT_EQ(projection.distance_std, 0.0);

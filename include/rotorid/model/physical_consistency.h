@@ -117,8 +117,11 @@ struct ConsistentProjection {
   int largest_move_parameter = -1;
   bool converged = true;
 };
+// `start`: a consistent body to start from (the one the model predicts with), else the estimate with
+// its negative second moments raised.
 ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParameters& estimate,
                                                  const Eigen::MatrixXd& sqrt_information,
-                                                 const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev);
+                                                 const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
+                                                 const BodyParameters* start = nullptr);
 
 }  // namespace rotorid
