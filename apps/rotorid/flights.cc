@@ -240,8 +240,7 @@ void PrintParameterTable(std::ostream& out, const std::vector<std::string>& name
     if (PredictsWithProfiled(solution, static_cast<int>(k)) || solution.PredictsWithinRange(static_cast<int>(k)))
       out << ", predicted with " << ShortNumber(PredictionChi(solution)[i]);
     if (solution.HasAllowedRange(static_cast<int>(k)))
-      out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. "
-          << ShortNumber(solution.allowed_high[i]);
+      out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. " << ShortNumber(solution.allowed_high[i]);
     out << "\n";
   }
   out.unsetf(std::ios::floatfield);

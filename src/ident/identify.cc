@@ -254,15 +254,15 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
   }
   // Without kd the yaw equation has no rotor term: Mz leaves Table III and the diagnosis's score,
   // and with it every effect that acts on the yaw moment.
-  if (const int kd = result.system.Column("kd");
-      kd >= 0 && !solution.essential[kd] &&
-      std::find(options.tls.fixed_zero.begin(), options.tls.fixed_zero.end(), "kd") == options.tls.fixed_zero.end()) {
+  if (const int kd = result.system.Column("kd"); kd >= 0 && !solution.essential[kd] &&
+                                                 std::find(options.tls.fixed_zero.begin(), options.tls.fixed_zero.end(),
+                                                           "kd") == options.tls.fixed_zero.end()) {
     double yaw_rms = 0.0;
     for (const FlightFit& fit : result.per_flight)
       yaw_rms = std::max(yaw_rms, fit.excitation.angular_acceleration_rms[2]);
     result.warnings.push_back(
-        "kd is not identified (" + ShortNumber(solution.rel_std_pct[kd]) + " % std; RMS angular acceleration about z " +
-        ShortNumber(yaw_rms) +
+        "kd is not identified (" + ShortNumber(solution.rel_std_pct[kd]) +
+        " % std; RMS angular acceleration about z " + ShortNumber(yaw_rms) +
         " rad/s^2): Mz has no rotor term, so it is left out of Table III and of the diagnosis's held-out score. "
         "Either the flights' yaw does not fix the yaw equation (fly yaw manoeuvres) or an unmodelled effect blurs "
         "it (a rotor-speed delay or lag, a rotor inertia); `rotorid diagnose` names the candidates it cannot test "

@@ -304,11 +304,11 @@ std::pair<double, double> RefineBounds(EffectKind kind, const RefineOptions& opt
 struct EffectProblem {
   CriterionContext context;
   internal::EffectBlocks effect_blocks;
-  Eigen::VectorXd scaled_chi;                    // chi in units of context.chi_scale
-  std::vector<Eigen::VectorXd> effect_values;    // per free effect, in units of its RefineScale
+  Eigen::VectorXd scaled_chi;                  // chi in units of context.chi_scale
+  std::vector<Eigen::VectorXd> effect_values;  // per free effect, in units of its RefineScale
   std::vector<Eigen::MatrixXd> held_directions;  // per free effect (HeldDirections)
-  std::vector<double*> blocks_of_residual;       // scaled_chi, then each free effect's block
-  std::vector<int> fixed, free;                  // chi coordinates held at 0 / estimated
+  std::vector<double*> blocks_of_residual;     // scaled_chi, then each free effect's block
+  std::vector<int> fixed, free;                // chi coordinates held at 0 / estimated
   std::vector<std::unique_ptr<RotorSignalCache>> caches;
   std::vector<internal::RotorMomentAnchor> anchors;
   std::vector<ceres::ResidualBlockId> residual_blocks;

@@ -91,10 +91,9 @@ nlohmann::json VectorJson(const Eigen::VectorXd& v) {
 
 nlohmann::json ObservationOptionsJson(const ObservationOptions& options) {
   return {{"source", DataSourceName(options.source)},
-          {"filter",
-           {{"type", "butterworth low-pass, zero-phase"},
-            {"order", options.filter.order},
-            {"cutoff_hz", options.filter.cutoff_hz}}},
+          {"filter", {{"type", "butterworth low-pass, zero-phase"},
+                      {"order", options.filter.order},
+                      {"cutoff_hz", options.filter.cutoff_hz}}},
           {"row_rate_hz", options.row_rate_hz},
           {"edge_trim_s", options.edge_trim_s}};
 }
@@ -102,8 +101,7 @@ nlohmann::json ObservationOptionsJson(const ObservationOptions& options) {
 ObservationOptions ObservationOptionsFromJson(const nlohmann::json& j) {
   ObservationOptions options;
   if (!j.is_object()) return options;
-  if (j.contains("source"))
-    options.source = j.at("source").get<std::string>() == "mocap" ? DataSource::kMocap : DataSource::kImu;
+  if (j.contains("source")) options.source = j.at("source").get<std::string>() == "mocap" ? DataSource::kMocap : DataSource::kImu;
   if (j.contains("filter")) {
     options.filter.order = j.at("filter").value("order", options.filter.order);
     options.filter.cutoff_hz = j.at("filter").value("cutoff_hz", options.filter.cutoff_hz);
@@ -114,9 +112,12 @@ ObservationOptions ObservationOptionsFromJson(const nlohmann::json& j) {
 }
 
 nlohmann::json TlsOptionsJson(const TlsOptions& options) {
-  return {{"method", TlsMethodName(options.method)},      {"weight_by_component", options.weight_by_component},
-          {"select_essential", options.select_essential}, {"r_sigma", options.r_sigma},
-          {"max_rel_std_pct", options.max_rel_std_pct},   {"fixed_zero", options.fixed_zero}};
+  return {{"method", TlsMethodName(options.method)},
+          {"weight_by_component", options.weight_by_component},
+          {"select_essential", options.select_essential},
+          {"r_sigma", options.r_sigma},
+          {"max_rel_std_pct", options.max_rel_std_pct},
+          {"fixed_zero", options.fixed_zero}};
 }
 
 nlohmann::json FlightFitJson(const FlightFit& fit) {
@@ -127,10 +128,9 @@ nlohmann::json FlightFitJson(const FlightFit& fit) {
           {"samples", fit.samples},
           {"row_samples", fit.row_samples},
           {"duration_s", fit.duration_s},
-          {"excitation",
-           {{"angular_acceleration_rms", VectorJson(e.angular_acceleration_rms)},
-            {"angular_velocity_rms", VectorJson(e.angular_velocity_rms)},
-            {"thrust_variation_pct", JsonNumber(e.thrust_variation_pct)}}},
+          {"excitation", {{"angular_acceleration_rms", VectorJson(e.angular_acceleration_rms)},
+                          {"angular_velocity_rms", VectorJson(e.angular_velocity_rms)},
+                          {"thrust_variation_pct", JsonNumber(e.thrust_variation_pct)}}},
           {"relative_error_pct", ComponentsJson(fit.relative_error_pct)},
           {"mean_force_residual_n", VectorJson(fit.mean_force_residual_n)}};
 }
@@ -152,20 +152,18 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
           {"relative_error_pct", ComponentsJson(result.relative_error_pct)},
           {"discarded", discarded},
           {"flights", flights},
-          {"statistics",
-           {{"sigma_w", JsonNumber(s.sigma_w)},
-            {"singular_values", VectorJson(s.singular_values)},
-            {"scale_entry", JsonNumber(s.scale_entry)},
-            {"iterations", s.iterations},
-            {"rows", result.system.num_rows()}}},
+          {"statistics", {{"sigma_w", JsonNumber(s.sigma_w)},
+                          {"singular_values", VectorJson(s.singular_values)},
+                          {"scale_entry", JsonNumber(s.scale_entry)},
+                          {"iterations", s.iterations},
+                          {"rows", result.system.num_rows()}}},
           {"warnings", result.warnings}};
 }
 
 std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
                                                         const std::string& block, bool predicted) {
   std::string chosen = block;
-  if (chosen.empty())
-    chosen = report.contains("refined") && report["refined"].contains("parameters") ? "refined" : "linear";
+  if (chosen.empty()) chosen = report.contains("refined") && report["refined"].contains("parameters") ? "refined" : "linear";
   if (!report.is_object() || !report.contains(chosen) || !report[chosen].is_object() ||
       !report[chosen].contains("parameters") || !report[chosen]["parameters"].is_object())
     throw Error(source + ": not a rotorid identify/refine report (no '" + chosen + ".parameters')");

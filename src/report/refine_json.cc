@@ -34,13 +34,8 @@ std::vector<EffectParameterEstimate> EffectParameterEstimates(const Effects& val
     const std::vector<std::string>& labels = kind->info().labels;
     if (!labels.empty()) {  // one entry per coefficient, as INTERFACE.md names them
       for (size_t k = 0; k < labels.size(); ++k)
-        out.push_back({labels[k],
-                       Eigen::VectorXd::Constant(1, at(v, k)),
-                       Eigen::VectorXd::Constant(1, at(s, k)),
-                       true,
-                       on,
-                       bounded,
-                       {}});
+        out.push_back({labels[k], Eigen::VectorXd::Constant(1, at(v, k)), Eigen::VectorXd::Constant(1, at(s, k)),
+                       true, on, bounded, {}});
     } else {
       out.push_back({EffectParameterName(kind), v, s, kind->FixedDimension() == 1, on, bounded,
                      kind->HeldLabels(static_cast<int>(v.size()))});
@@ -84,8 +79,7 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
           {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled, refined.on_bound)},
           {"relative_error_pct", ComponentsJson(refined.relative_error_pct)},
           {"effect_correlation", {{"labels", refined.effect_labels}, {"matrix", correlation}}},
-          {"criterion",
-           {{"linear", JsonNumber(refined.linear_criterion)}, {"refined", JsonNumber(refined.refined_criterion)}}},
+          {"criterion", {{"linear", JsonNumber(refined.linear_criterion)}, {"refined", JsonNumber(refined.refined_criterion)}}},
           {"autocorrelation_factor", JsonNumber(refined.autocorrelation_factor)},
           {"solver", SolverJson(refined.solver)},
           {"warnings", refined.warnings}};

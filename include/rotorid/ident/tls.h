@@ -16,12 +16,13 @@
 // The refinement minimises the same criterion with the same lambda and N, so that with every
 // effect off it returns this solution.
 
-#include <Eigen/Core>
 #include <array>
 #include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "rotorid/ident/observation.h"
 #include "rotorid/model/parameters.h"
@@ -41,7 +42,7 @@ struct IdimLayout {
   std::vector<int> row_group;
   std::vector<int> row_sample;
   std::vector<double> flight_weight;
-  std::vector<int> flight_config;  // configuration index per flight
+  std::vector<int> flight_config;              // configuration index per flight
   std::vector<std::string> flight_source;
   // Per flight, the system column of each of its nine body parameters.
   std::vector<std::array<int, kNumBodyParameters>> flight_body_columns;
@@ -96,31 +97,31 @@ struct TlsOptions {
 
 struct DiscardedParameter {
   std::string name;
-  double value = 0.0;  // estimate, std and %sigma at the moment it was dropped
+  double value = 0.0;             // estimate, std and %sigma at the moment it was dropped
   double std = 0.0;
   double rel_std_pct = 0.0;
-  std::string most_correlated;  // the free parameter it was most correlated with
+  std::string most_correlated;    // the free parameter it was most correlated with
   double correlation = 0.0;
   std::string reason;
 };
 
 struct TlsSolution {
   TlsMethod method = TlsMethod::kNoiseAware;
-  Eigen::VectorXd chi;  // all parameters; discarded ones are 0
+  Eigen::VectorXd chi;            // all parameters; discarded ones are 0
   std::vector<bool> essential;
-  Eigen::MatrixXd covariance;  // all parameters; rows/cols of discarded ones are 0
+  Eigen::MatrixXd covariance;     // all parameters; rows/cols of discarded ones are 0
   Eigen::VectorXd std;
   Eigen::VectorXd rel_std_pct;
   std::vector<DiscardedParameter> discarded;
   // The criterion actually minimised (for the refinement): row weights and column metric.
-  Eigen::VectorXd row_weight;       // lambda_i
-  Eigen::MatrixXd column_metric;    // N, (p+1)x(p+1)
-  double sigma_w = 0.0;             // paper eq. 19 (paper) or the RMS whitened residual (noise-aware)
+  Eigen::VectorXd row_weight;     // lambda_i
+  Eigen::MatrixXd column_metric;  // N, (p+1)x(p+1)
+  double sigma_w = 0.0;           // paper eq. 19 (paper) or the RMS whitened residual (noise-aware)
   Eigen::VectorXd singular_values;  // of the final weighted (and, noise-aware, whitened) system
-  double scale_entry = 1.0;         // |last entry| of the unit solution vector in equilibrated columns
+  double scale_entry = 1.0;       // |last entry| of the unit solution vector in equilibrated columns
   int iterations = 0;
   bool usable = true;
-  std::string message;  // why it is not usable
+  std::string message;            // why it is not usable
   std::vector<std::string> warnings;
   // Discarded parameters whose physics excludes 0 (PositiveByPhysics: kt, kd, the inertia's
   // diagonal), noise-aware method: not reported (chi, std and covariance hold 0, as for the other
@@ -146,8 +147,8 @@ struct TlsSolution {
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 
 // The parameters a model predicts with: chi, and the profiled parameters' estimates in place of their
-// zeros where PredictsWithProfiled (a discarded inertia is estimated beside the others, and its gyroscopic terms act in
-// Mx and My: held at 0 in the prediction, jana06's Table III read Mx 29.1 % for 21.9 %), except the rotor
+// zeros where PredictsWithProfiled (a discarded inertia is estimated beside the others, and its gyroscopic terms act in Mx and My:
+// held at 0 in the prediction, jana06's Table III read Mx 29.1 % for 21.9 %), except the rotor
 // coefficients': a discarded kd is no identified rotor term, so Mz keeps none and stays out of
 // Table III (INTERFACE.md 5). The reported values stay chi (discarded: 0).
 // A discarded inertia whose profiled estimate lies outside the range a physical body allows, or that

@@ -3,10 +3,11 @@
 // Machine-readable reports (INTERFACE.md section 5). Key names there are fixed; everything else
 // is documented in docs/report_format.md.
 
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "rotorid/ident/checks.h"
 #include "rotorid/ident/identify.h"
@@ -28,7 +29,8 @@ struct ParameterStatistics {
   const DiscardedParameter* discarded = nullptr;  // into the solution; null unless the selection dropped it
 };
 // Of parameter `k` (named names[k]) of `solution`.
-ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names, const TlsSolution& solution, size_t k);
+ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names, const TlsSolution& solution,
+                                          size_t k);
 
 // {"value", "std", "rel_std_pct", "essential"} for every parameter of a solution (ParameterStatisticsOf);
 // a discarded one also has "estimate_when_discarded", "most_correlated_with" and "correlation".
