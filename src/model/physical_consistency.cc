@@ -188,7 +188,8 @@ Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const Bo
 namespace {
 
 // One Ceres descent from a consistent body, and the projection it ends at.
-ConsistentProjection DescendFrom(double mass_kg, const BodyParameters& estimate, const Eigen::MatrixXd& sqrt_information,
+ConsistentProjection DescendFrom(double mass_kg, const BodyParameters& estimate,
+                                 const Eigen::MatrixXd& sqrt_information,
                                  const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
                                  const BodyParameters& start_body) {
   const Eigen::Matrix<double, kNumLogCholesky, 1> start = LogCholeskyOf(mass_kg, start_body);
