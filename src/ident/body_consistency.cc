@@ -146,6 +146,16 @@ InertiaRange CommonShift(double mass_kg, const std::vector<int>& first_moments, 
   return range;
 }
 
+// A discarded I_zz: these flights do not fix the yaw scale (kd and I_zz are one ratio in the yaw
+// equation), so its value is one a body allows, not an estimate; what would fix it.
+std::string YawScaleNote(const CheckedParameters& p, const BodyAssessment& a) {
+  const std::string zz = a.config + ".I_zz";
+  if (!p.value.count(zz) || Essential(p, zz)) return "";
+  return "; I_zz is not fixed by these flights (predicted with " + ShortNumber(a.predicted.inertia(2, 2)) +
+         ", a value a body allows): yaw manoeuvres, or a second configuration with an asymmetric payload (the "
+         "paper's B), fix the yaw scale";
+}
+
 }  // namespace
 
 void SetAllowedRanges(const IdimLayout& layout, const std::map<std::string, double>& mass_kg, TlsSolution* solution) {
@@ -270,7 +280,8 @@ std::vector<Check> PhysicalConsistencyChecks(const CheckedParameters& p, const s
              " kg m^2" + distance +
              (far ? ": the discarded inertias are predicted within the range a body allows, but the estimate is "
                     "no body; the flights or the model (mass, geometry, an unmodelled effect) are wrong"
-                  : "")});
+                  : "") +
+             YawScaleNote(p, a)});
   }
   return checks;
 }

@@ -55,6 +55,10 @@ TEST(PhysicalConsistencyCliTest, TheBundledLinearModelPredictsWithBodiesAndSaysH
   EXPECT_TRUE(bodies[1]["consistent"].get<bool>());
   EXPECT_GT(bodies[1]["distance_std"].get<double>(), 3.0);
   EXPECT_EQ(checks[1]["status"], "warning");
+  // One yaw scale for kd and I_zz, which these flights do not fix: said, with what would fix it.
+  for (const nlohmann::json& c : checks)
+    EXPECT_NE(c["message"].get<std::string>().find("I_zz is not fixed by these flights"), std::string::npos)
+        << c.dump();
 }
 
 // With the delay and the lag refined, kd comes back and both refined bodies are physical as
