@@ -235,9 +235,12 @@ void PrintParameterTable(std::ostream& out, const std::vector<std::string>& name
         << std::setprecision(4) << std::setw(14) << solution.chi[i] << std::setprecision(2) << std::setw(12)
         << solution.std[i] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[i] << "  "
         << (solution.essential[k] ? "yes" : "no (discarded)");
-    // A discarded inertia the model still estimates and predicts with (PredictionChi).
-    if (PredictsWithProfiled(solution, static_cast<int>(k)))
-      out << ", predicted with " << ShortNumber(solution.profiled_chi[i]);
+    // A discarded inertia the model still estimates and predicts with (PredictionChi), and the range a
+    // physical body allows it.
+    if (PredictsWithProfiled(solution, static_cast<int>(k)) || solution.PredictsWithinRange(static_cast<int>(k)))
+      out << ", predicted with " << ShortNumber(PredictionChi(solution)[i]);
+    if (solution.HasAllowedRange(static_cast<int>(k)))
+      out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. " << ShortNumber(solution.allowed_high[i]);
     out << "\n";
   }
   out.unsetf(std::ios::floatfield);

@@ -29,15 +29,24 @@ void PrintSideBySide(const IdentificationResult& linear, const RefineResult& ref
             << std::setw(10) << "std" << std::setw(13) << "refined" << std::setw(10) << "std" << std::setw(10)
             << "change/std"
             << "\n";
+  // Each block's own essential flag, as in the JSON: a parameter one block discarded shows "discarded"
+  // in that block's std column, and the change is shown where both estimated it.
+  const auto value_and_std = [](const TlsSolution& s, int k) {
+    std::cout << std::scientific << std::setprecision(4) << std::setw(13) << s.chi[k] << std::setprecision(1)
+              << std::setw(10);
+    if (s.essential[k])
+      std::cout << s.std[k];
+    else
+      std::cout << "discarded";
+  };
   for (int k = 0; k < linear.system.num_parameters(); ++k) {
-    std::cout << std::left << std::setw(static_cast<int>(width)) << linear.system.parameter_names[k] << std::right
-              << std::scientific << std::setprecision(4) << std::setw(13) << a.chi[k] << std::setprecision(1)
-              << std::setw(10) << a.std[k] << std::setprecision(4) << std::setw(13) << b.chi[k] << std::setprecision(1)
-              << std::setw(10) << b.std[k];
-    if (a.essential[k] && a.std[k] > 0)
+    std::cout << std::left << std::setw(static_cast<int>(width)) << linear.system.parameter_names[k] << std::right;
+    value_and_std(a, k);
+    value_and_std(b, k);
+    if (a.essential[k] && b.essential[k] && a.std[k] > 0)
       std::cout << std::fixed << std::setprecision(2) << std::setw(10) << (b.chi[k] - a.chi[k]) / a.std[k];
     else
-      std::cout << std::setw(10) << "discarded";
+      std::cout << std::setw(10) << "-";
     std::cout << "\n";
   }
   std::cout.unsetf(std::ios::floatfield);

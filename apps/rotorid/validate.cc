@@ -2,6 +2,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/refine/refine.h"
 #include "rotorid/report/checks_json.h"
 #include "rotorid/report/html_report.h"
@@ -9,6 +10,27 @@
 #include "rotorid/report/refine_json.h"
 
 namespace rotorid::cli {
+
+namespace {
+
+// The saved parameters as validate predicts with them (the flights' own first moments fitted), with
+// the report's essential flags and the flights' masses: what physical_consistency checks.
+CheckedParameters ValidatedModel(const nlohmann::json& params, const std::string& block,
+                                 const std::map<std::string, double>& values,
+                                 const std::vector<ProcessedFlight>& flights) {
+  CheckedParameters model;
+  model.value = values;
+  model.mass_kg = ConfigurationMasses(flights);
+  for (const auto& [name, entry] : params[block]["parameters"].items()) {
+    if (!entry.is_object()) continue;
+    if (entry.contains("essential") && entry["essential"].is_boolean())
+      model.essential[name] = entry["essential"].get<bool>();
+    if (entry.contains("predicts_with") && values.count(name)) model.predicts_with[name] = values.at(name);
+  }
+  return model;
+}
+
+}  // namespace
 
 Command AddValidateCommand(CLI::App& root) {
   struct Options {
@@ -72,6 +94,8 @@ Command AddValidateCommand(CLI::App& root) {
     if (!first_moments.empty()) report["first_moments"] = first_moments;
     AddCommonReportSections(*app, loaded, nullptr, &report);
     for (Check& c : CheckRelativeError(combined, "validation", /*held_out=*/true)) checks.push_back(std::move(c));
+    for (Check& c : PhysicalConsistencyChecks(ValidatedModel(params, block, values, flights), "validation"))
+      checks.push_back(std::move(c));
     report["checks"] = ChecksJson(checks);
     if (!options->flights.json_path.empty()) WriteJsonFile(options->flights.json_path, report);
     ReportInput input = CommandReportInput("validate", observation, loaded, nullptr, settings);

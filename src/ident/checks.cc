@@ -9,6 +9,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/model/parameters.h"
 
@@ -348,13 +349,39 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
 
 CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolution& solution) {
   CheckedParameters p;
+  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (int k = 0; k < system.num_parameters(); ++k) {
     const std::string& name = system.parameter_names[k];
     p.value[name] = solution.chi[k];
     p.std[name] = solution.std[k];
     p.essential[name] = solution.essential[k];
+    if (solution.Profiled(k)) {
+      p.profiled[name] = solution.profiled_chi[k];
+      p.profiled_std[name] = solution.profiled_std[k];
+    }
+    if (solution.PredictsWithinRange(k)) {  // a value a body allows, not an estimate: no std
+      p.predicts_with[name] = predicted[k];
+      p.predicts_with_std[name] = 0.0;
+    } else if (PredictsWithProfiled(solution, k)) {
+      p.predicts_with[name] = predicted[k];
+      p.predicts_with_std[name] = solution.profiled_std[k];
+    }
   }
+  p.covariance_names = system.parameter_names;
+  p.covariance = solution.covariance;
   return p;
+}
+
+CheckedParameters CheckedFromSolution(const IdentificationResult& linear, const TlsSolution& solution) {
+  CheckedParameters p = CheckedFromSolution(linear.system, solution);
+  p.mass_kg = ConfigurationMasses(linear.flights);
+  return p;
+}
+
+std::map<std::string, double> ConfigurationMasses(const std::vector<ProcessedFlight>& flights) {
+  std::map<std::string, double> mass;
+  for (const ProcessedFlight& f : flights) mass.emplace(f.vehicle.name, f.vehicle.mass_kg);
+  return mass;
 }
 
 namespace {
@@ -500,6 +527,7 @@ std::vector<Check> CheckParameters(const CheckedParameters& p, const std::vector
     checks.push_back({"kd_positive", CheckStatus::kOk,
                       label + ": kd = " + ShortNumber(kd.value) + (kd.estimated ? "" : " (not estimated)")});
   for (const std::string& config : configs) checks.push_back(InertiaCheck(p, config, label, kd, yaw_scale_flipped));
+  for (Check& c : PhysicalConsistencyChecks(p, label)) checks.push_back(std::move(c));
   return checks;
 }
 
@@ -540,8 +568,8 @@ void ExcuseLinearParameterErrors(const std::vector<Check>& linear, const std::ve
   std::map<std::string, int> seen;
   for (const Check& failed : linear) {
     const int n = seen[failed.name]++;
-    if (failed.status != CheckStatus::kError ||
-        (failed.name != "kt_positive" && failed.name != "kd_positive" && failed.name != "inertia"))
+    if (failed.status != CheckStatus::kError || (failed.name != "kt_positive" && failed.name != "kd_positive" &&
+                                                 failed.name != "inertia" && failed.name != "physical_consistency"))
       continue;
     const Check* passed = nth(with_effects, failed.name, n);
     if (!passed || passed->status != CheckStatus::kOk) continue;
@@ -571,8 +599,7 @@ IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const I
     if (!AnyCheckFailed(*checks)) throw;
     throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(*checks));
   }
-  for (Check& c :
-       CheckParameters(CheckedFromSolution(result.system, result.solution), result.system.config_names, "linear"))
+  for (Check& c : CheckParameters(CheckedFromSolution(result, result.solution), result.system.config_names, "linear"))
     checks->push_back(std::move(c));
   for (Check& c : CheckRelativeError(result.relative_error_pct, "linear", /*held_out=*/false))
     checks->push_back(std::move(c));

@@ -7,6 +7,7 @@
 
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/model/rigid_body.h"
 
@@ -217,6 +218,7 @@ IdentificationResult IdentifyProcessed(std::vector<ProcessedFlight> flights, con
   result.system = BuildIdimSystem(result.flights);
   if (progress) progress(1, 2);
   result.solution = SolveIdim(result.system, options.tls);
+  SetAllowedRanges(result.system, ConfigurationMasses(result.flights), &result.solution);
   if (progress) progress(2, 2);
   const TlsSolution& solution = result.solution;
   if (!solution.usable) {

@@ -146,8 +146,12 @@ bool PredictsWithProfiled(const TlsSolution& solution, int k) {
 
 Eigen::VectorXd PredictionChi(const TlsSolution& solution) {
   Eigen::VectorXd chi = solution.chi;
-  for (Eigen::Index k = 0; k < chi.size(); ++k)
-    if (PredictsWithProfiled(solution, static_cast<int>(k))) chi[k] = solution.profiled_chi[k];
+  for (Eigen::Index k = 0; k < chi.size(); ++k) {
+    if (solution.PredictsWithinRange(static_cast<int>(k)))
+      chi[k] = solution.within_range_chi[k];
+    else if (PredictsWithProfiled(solution, static_cast<int>(k)))
+      chi[k] = solution.profiled_chi[k];
+  }
   return chi;
 }
 

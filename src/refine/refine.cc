@@ -15,6 +15,7 @@
 #include "refine/idim_residual.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/model/rigid_body.h"
 #include "rotorid/refine/effect_model.h"
 #include "rotorid/signal/autocorrelation.h"
@@ -806,6 +807,11 @@ RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const Idi
   result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
   for (int k = 0; k < chi.size(); ++k)
     if (chi[k] != 0.0) result.refined.rel_std_pct[k] = 100.0 * result.refined.std[k] / std::abs(chi[k]);
+  // As in SolveIdim: a discarded parameter keeps the %sigma it had when the selection dropped it (0
+  // would read as exactly known).
+  for (const DiscardedParameter& d : result.refined.discarded)
+    if (const int k = system.Column(d.name); k >= 0) result.refined.rel_std_pct[k] = d.rel_std_pct;
+  SetAllowedRanges(system, ConfigurationMasses(flights), &result.refined);
   return result;
 }
 

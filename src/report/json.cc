@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "rotorid/core/error.h"
+#include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/parameters.h"
 
@@ -27,6 +28,7 @@ ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names,
 
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution) {
   nlohmann::json out = nlohmann::json::object();
+  const Eigen::VectorXd predicted = PredictionChi(solution);
   for (size_t k = 0; k < names.size(); ++k) {
     const ParameterStatistics p = ParameterStatisticsOf(names, solution, k);
     nlohmann::json entry = {{"value", JsonNumber(p.value)},
@@ -40,9 +42,36 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
     }
     // A discarded parameter the model still estimates and predicts with (PredictionChi): validate
     // predicts with it too.
-    if (PredictsWithProfiled(solution, static_cast<int>(k)))
-      entry["predicts_with"] = JsonNumber(solution.profiled_chi[static_cast<Eigen::Index>(k)]);
+    const int i = static_cast<int>(k);
+    if (PredictsWithProfiled(solution, i) || solution.PredictsWithinRange(i))
+      entry["predicts_with"] = JsonNumber(predicted[i]);
+    // The values a physical body allows a discarded inertia (the others as predicted with).
+    if (solution.HasAllowedRange(i))
+      entry["allowed_range"] = {JsonNumber(solution.allowed_low[i]), JsonNumber(solution.allowed_high[i])};
     out[names[k]] = entry;
+  }
+  return out;
+}
+
+nlohmann::json BodiesJson(const CheckedParameters& parameters) {
+  nlohmann::json out = nlohmann::json::array();
+  const auto vector = [](const Eigen::Vector3d& v) { return VectorJson(v); };
+  for (const BodyAssessment& a : AssessBodies(parameters)) {
+    const PhysicalConsistency& c = a.consistency;
+    nlohmann::json body = {{"body", a.name},
+                           {"consistent", c.consistent},
+                           {"centre_of_mass_m", vector(c.centre_of_mass_m)},
+                           {"principal_moments_at_com", vector(c.principal_moments_at_com)},
+                           {"rms_extent_m", vector(c.rms_extent_m)},
+                           {"distance_std", a.has_projection ? JsonNumber(a.projection.distance_std) : nullptr}};
+    if (!c.consistent) body["cause"] = a.cause;
+    if (a.has_projection && a.projection.distance_std > 0.0) {
+      nlohmann::json nearest = nlohmann::json::object();
+      const Eigen::Matrix<double, kNumBodyParameters, 1> chi = a.projection.body.ToVector();
+      for (int k = 0; k < kNumBodyParameters; ++k) nearest[kBodyParameterNames[k]] = JsonNumber(chi[k]);
+      body["nearest_consistent"] = nearest;
+    }
+    out.push_back(body);
   }
   return out;
 }
@@ -119,6 +148,7 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
   for (const FlightFit& fit : result.per_flight) flights.push_back(FlightFitJson(fit));
   return {{"method", TlsMethodName(s.method)},
           {"parameters", ParametersJson(result.system.parameter_names, s)},
+          {"bodies", BodiesJson(CheckedFromSolution(result, s))},
           {"relative_error_pct", ComponentsJson(result.relative_error_pct)},
           {"discarded", discarded},
           {"flights", flights},

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rotorid/refine/refine_checks.h"
 #include "rotorid/report/json.h"
 
 namespace rotorid {
@@ -84,6 +85,7 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
     correlation.push_back(row);
   }
   return {{"parameters", ParametersJson(linear.system.parameter_names, refined.refined)},
+          {"bodies", BodiesJson(CheckedFromRefinement(linear, refined))},
           {"effects", EffectsJson(refined.effects, refined.effects_std, refined.enabled, refined.on_bound)},
           {"relative_error_pct", ComponentsJson(refined.relative_error_pct)},
           {"effect_correlation", {{"labels", refined.effect_labels}, {"matrix", correlation}}},

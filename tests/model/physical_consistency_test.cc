@@ -1,8 +1,12 @@
 #include "rotorid/model/physical_consistency.h"
 
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include "rotorid/core/error.h"
 
 namespace rotorid {
 namespace {
@@ -43,7 +47,7 @@ TEST(PhysicalConsistencyTest, ABoxOffTheOriginIsConsistentAndItsExtentsAreRecove
 TEST(PhysicalConsistencyTest, ACentreOfMassFarBelowWithASmallRollInertiaIsFlagged) {
   BodyParameters body;
   body.first_moment = Eigen::Vector3d(0.0, 0.0, -9.5e-4);
-  body.inertia = Eigen::Vector3d(3.4e-6, 1.7e-5, 1.9e-5).asDiagonal();
+  body.inertia = Eigen::Vector3d(3.4e-6, 2.6e-5, 2.9e-5).asDiagonal();
   const Eigen::Matrix3d i = body.inertia;
   ASSERT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(i).eigenvalues()[0], 0.0);
   ASSERT_LE(i(2, 2), i(0, 0) + i(1, 1));
@@ -72,6 +76,123 @@ TEST(PhysicalConsistencyTest, NonPositiveMassOrNonFiniteValuesAreNotABody) {
   BodyParameters nan = box;
   nan.inertia(0, 0) = std::nan("");
   EXPECT_FALSE(CheckPhysicalConsistency(1.0, nan).consistent);
+}
+
+Eigen::Matrix<double, kNumBodyParameters, 1> ChiOf(const Eigen::Matrix<double, kNumLogCholesky, 1>& theta,
+                                                   double* mass) {
+  Eigen::Matrix<double, kNumBodyParameters, 1> chi;
+  BodyFromLogCholesky(theta.data(), chi.data(), mass);
+  return chi;
+}
+
+// A tilted box with products of inertia, off the origin.
+BodyParameters TiltedBox() {
+  BodyParameters box = Box(0.7, Eigen::Vector3d(0.25, 0.18, 0.05), Eigen::Vector3d(0.012, -0.008, -0.02));
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1.0, 2.0, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Vector3d c = box.first_moment / 0.7;
+  BodyParameters at_com;
+  at_com.inertia = box.inertia - 0.7 * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+  at_com.inertia = r * at_com.inertia * r.transpose();
+  return AddPointMass(at_com, 0.7, c);
+}
+
+TEST(LogCholeskyTest, RoundTripsAConsistentBody) {
+  const BodyParameters body = TiltedBox();
+  const Eigen::Matrix<double, kNumLogCholesky, 1> theta = LogCholeskyOf(0.7, body);
+  double mass = 0.0;
+  const Eigen::Matrix<double, kNumBodyParameters, 1> chi = ChiOf(theta, &mass);
+  EXPECT_NEAR(mass, 0.7, 1e-14);
+  EXPECT_LT((chi - body.ToVector()).cwiseAbs().maxCoeff(), 1e-14) << chi.transpose();
+  // And the other way: any theta is a consistent body, whose theta is the one it came from.
+  Eigen::Matrix<double, kNumLogCholesky, 1> any;
+  any << -0.3, 0.5, -1.2, -2.0, 0.1, -0.2, 0.05, 0.02, -0.01, -0.03;
+  const Eigen::Matrix<double, kNumBodyParameters, 1> other = ChiOf(any, &mass);
+  EXPECT_TRUE(CheckPhysicalConsistency(mass, BodyParameters::FromVector(other)).consistent);
+  EXPECT_LT((LogCholeskyOf(mass, BodyParameters::FromVector(other)) - any).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(LogCholeskyTest, RejectsAnImpossibleBody) {
+  BodyParameters body;
+  body.inertia = Eigen::Vector3d(0.015, 0.0152 + 2e-3, 1.9e-4).asDiagonal();
+  EXPECT_THROW(LogCholeskyOf(1.285, body), Error);
+}
+
+TEST(LogCholeskyTest, JacobianMatchesCentralDifferences) {
+  using Jet = ceres::Jet<double, kNumLogCholesky>;
+  const Eigen::Matrix<double, kNumLogCholesky, 1> theta = LogCholeskyOf(0.7, TiltedBox());
+  Jet theta_jet[kNumLogCholesky], chi_jet[kNumBodyParameters], mass_jet;
+  for (int k = 0; k < kNumLogCholesky; ++k) theta_jet[k] = Jet(theta[k], k);
+  BodyFromLogCholesky(theta_jet, chi_jet, &mass_jet);
+  const double h = 1e-6;
+  for (int k = 0; k < kNumLogCholesky; ++k) {
+    Eigen::Matrix<double, kNumLogCholesky, 1> plus = theta, minus = theta;
+    plus[k] += h;
+    minus[k] -= h;
+    double mass_plus = 0.0, mass_minus = 0.0;
+    const Eigen::Matrix<double, kNumBodyParameters, 1> numeric =
+        (ChiOf(plus, &mass_plus) - ChiOf(minus, &mass_minus)) / (2.0 * h);
+    EXPECT_NEAR(mass_jet.v[k], (mass_plus - mass_minus) / (2.0 * h), 1e-8);
+    for (int i = 0; i < kNumBodyParameters; ++i)
+      EXPECT_NEAR(chi_jet[i].v[k], numeric[i], 1e-8 * std::max(1.0, std::abs(numeric[i])))
+          << "d chi_" << i << " / d theta_" << k;
+  }
+}
+
+// NanoBench's impossible body, with stds of its order: the projection is a consistent body no farther
+// than any other consistent body (here the same airframe with its centre of mass 8 mm below O_d).
+TEST(ConsistentProjectionTest, FindsTheNearestConsistentBodyInTheEstimatesMetric) {
+  BodyParameters estimate;
+  estimate.first_moment = Eigen::Vector3d(1e-5, -2e-5, -9.5e-4);
+  estimate.inertia = Eigen::Vector3d(3.4e-6, 2.6e-5, 2.9e-5).asDiagonal();
+  Eigen::Matrix<double, kNumBodyParameters, 1> std_dev;
+  std_dev << 2e-5, 2e-5, 3e-4, 2e-6, 2e-6, 3e-6, 5e-7, 5e-7, 5e-7;
+  const Eigen::MatrixXd sqrt_information = std_dev.cwiseInverse().asDiagonal();
+  const double mass = 0.04085;
+  ASSERT_FALSE(CheckPhysicalConsistency(mass, estimate).consistent);
+  const ConsistentProjection projection = ProjectOntoConsistentBodies(mass, estimate, sqrt_information, std_dev);
+  EXPECT_TRUE(projection.converged);
+  EXPECT_TRUE(CheckPhysicalConsistency(mass, projection.body).consistent);
+  EXPECT_GT(projection.distance_std, 0.5);
+  BodyParameters other = estimate;
+  other.first_moment.z() = -mass * 0.008;
+  other.inertia(0, 0) = 1.6e-5;
+  ASSERT_TRUE(CheckPhysicalConsistency(mass, other).consistent);
+  const double other_distance = (sqrt_information * (other.ToVector() - estimate.ToVector())).norm();
+  EXPECT_LT(projection.distance_std, other_distance);
+  // The consistent body nearest to the estimate moves the least known of ms_z and I_xx most.
+  EXPECT_TRUE(projection.largest_move_parameter == 2 || projection.largest_move_parameter == 3)
+      << projection.largest_move_parameter;
+}
+
+TEST(ConsistentProjectionTest, AConsistentEstimateIsItsOwnProjection) {
+  const BodyParameters box = TiltedBox();
+  const Eigen::Matrix<double, kNumBodyParameters, 1> std_dev =
+      Eigen::Matrix<double, kNumBodyParameters, 1>::Constant(1e-4);
+  const ConsistentProjection projection =
+      ProjectOntoConsistentBodies(0.7, box, std_dev.cwiseInverse().asDiagonal(), std_dev);
+  EXPECT_EQ(projection.distance_std, 0.0);
+  EXPECT_EQ((projection.body.ToVector() - box.ToVector()).norm(), 0.0);
+}
+
+// Centred at O_d, the triangle inequality is the whole range: |I_xx - I_yy| <= I_zz <= I_xx + I_yy.
+// Off the origin it narrows by the centre of mass's offsets.
+TEST(AllowedDiagonalInertiaTest, IsTheTriangleInequalityForACentredBody) {
+  BodyParameters body;
+  body.inertia = Eigen::Vector3d(0.018, 0.019, 0.0).asDiagonal();
+  const InertiaRange range = AllowedDiagonalInertia(1.285, body, 2);
+  EXPECT_NEAR(range.low, 0.001, 1e-12);
+  EXPECT_NEAR(range.high, 0.037, 1e-12);
+  // A centre of mass 10 mm below O_d moves I_xx and I_yy at O_d up by m c_z^2 but not I_zz.
+  const double shift = 1.285 * 0.01 * 0.01;
+  BodyParameters below;
+  below.first_moment = Eigen::Vector3d(0.0, 0.0, -1.285 * 0.01);
+  below.inertia = Eigen::Vector3d(0.018 + shift, 0.019 + shift, 0.0).asDiagonal();
+  const InertiaRange offset = AllowedDiagonalInertia(1.285, below, 2);
+  EXPECT_NEAR(offset.low, 0.001, 1e-12);
+  EXPECT_NEAR(offset.high, 0.037, 1e-12);
+  // A roll inertia smaller than m c_z^2 leaves no value of I_zz that makes a body.
+  below.inertia(0, 0) = 0.5 * shift;
+  EXPECT_TRUE(AllowedDiagonalInertia(1.285, below, 2).empty());
 }
 
 }  // namespace

@@ -69,12 +69,33 @@ struct CheckedParameters {
   std::map<std::string, double> value;
   std::map<std::string, double> std;
   std::map<std::string, bool> essential;
+  // What the model predicts with where that is not `value` (PredictionChi: a discarded inertia's
+  // profiled estimate), with its std.
+  std::map<std::string, double> predicts_with;
+  std::map<std::string, double> predicts_with_std;
+  // A discarded parameter's estimate beside the others (TlsSolution::profiled_chi) and its std, where
+  // the model predicts with another value (a range a body allows) or none: the estimate's distance to
+  // the physical bodies counts it.
+  std::map<std::string, double> profiled;
+  std::map<std::string, double> profiled_std;
+  // The covariance of the values named in covariance_names (empty: only the std is known): the
+  // metric of the projection onto the consistent bodies.
+  std::vector<std::string> covariance_names;
+  Eigen::MatrixXd covariance;
+  // Mass of each configuration (kg): physical_consistency is checked for the configurations in it.
+  std::map<std::string, double> mass_kg;
 };
 CheckedParameters CheckedFromSolution(const IdimSystem& system, const TlsSolution& solution);
+// The same with the configurations' masses, from `linear`'s flights (solution: linear's or a
+// refinement of it).
+CheckedParameters CheckedFromSolution(const IdentificationResult& linear, const TlsSolution& solution);
+// Mass of each configuration of `flights` (kg).
+std::map<std::string, double> ConfigurationMasses(const std::vector<ProcessedFlight>& flights);
 
 // kt > 0, kd > 0, inertia of each configuration positive definite and the triangle inequalities
-// (violations beyond 3 std), finite values and std, an essential parameter with std 0.
-// `label` says which model ("linear", "refined").
+// (violations beyond 3 std), finite values and std, an essential parameter with std 0, and
+// physical_consistency (PhysicalConsistencyChecks, rotorid/ident/body_consistency.h) of each
+// configuration in parameters.mass_kg. `label` says which model ("linear", "refined").
 std::vector<Check> CheckParameters(const CheckedParameters& parameters, const std::vector<std::string>& configs,
                                    const std::string& label);
 // The linear model's parameter checks (`linear`, CheckParameters of it) that fail where the same check

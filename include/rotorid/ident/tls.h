@@ -17,6 +17,7 @@
 // effect off it returns this solution.
 
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -133,6 +134,14 @@ struct TlsSolution {
   Eigen::VectorXd profiled_chi;  // their estimates, 0 elsewhere (the refinement starts there)
   Eigen::VectorXd profiled_std;  // and their std (the refinement's scale for them)
   bool Profiled(int k) const { return !profiled.empty() && profiled[k]; }
+  // A discarded diagonal inertia entry: the range of values with which its configuration is a physical
+  // body, the other parameters at what the model predicts with (SetAllowedRanges; NaN where not
+  // computed), and the value the model predicts with when its profiled estimate lies outside that
+  // range or it has none (NaN: PredictionChi's rule without the range).
+  Eigen::VectorXd allowed_low, allowed_high;
+  Eigen::VectorXd within_range_chi;
+  bool HasAllowedRange(int k) const { return allowed_low.size() > k && std::isfinite(allowed_low[k]); }
+  bool PredictsWithinRange(int k) const { return within_range_chi.size() > k && std::isfinite(within_range_chi[k]); }
 };
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
@@ -142,6 +151,8 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 // held at 0 in the prediction, jana06's Table III read Mx 29.1 % for 21.9 %), except the rotor
 // coefficients': a discarded kd is no identified rotor term, so Mz keeps none and stays out of
 // Table III (INTERFACE.md 5). The reported values stay chi (discarded: 0).
+// A discarded inertia whose profiled estimate lies outside the range a physical body allows, or that
+// has none, is predicted with a value inside that range (TlsSolution::within_range_chi).
 Eigen::VectorXd PredictionChi(const TlsSolution& solution);
 // Whether PredictionChi takes parameter k's profiled estimate (a profiled parameter, not a rotor
 // coefficient, with the sign its physics requires): what the model estimates beside its essential

@@ -13,6 +13,7 @@
 // squared RMS extents of the mass along the principal axes, so a violation reads in millimetres.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 
 #include "rotorid/model/parameters.h"
@@ -44,5 +45,83 @@ struct PhysicalConsistency {
 // singular: a planar body is a limit no real airframe reaches).
 PhysicalConsistency CheckPhysicalConsistency(double mass_kg, const BodyParameters& body,
                                              double relative_tolerance = 1e-9);
+
+// The values of the diagonal inertia entry I(axis, axis) (kg m^2) with which the body is consistent,
+// the other parameters held: an interval, since the consistent set is convex (I_zz between
+// |I_xx - I_yy| and I_xx + I_yy for a body centred at O_d). {NaN, NaN} when no value makes it a body.
+struct InertiaRange {
+  double low = 0.0;
+  double high = 0.0;
+  bool empty() const { return !(high > low); }
+};
+InertiaRange AllowedDiagonalInertia(double mass_kg, const BodyParameters& body, int axis);
+// The values t >= 0 with which the body with inertia I + t `direction` is consistent (an interval).
+InertiaRange AllowedInertiaShift(double mass_kg, const BodyParameters& body, const Eigen::Matrix3d& direction);
+
+// The log-Cholesky parameterisation of J (Rucker and Wensing, "Smooth parameterization of rigid-body
+// inertia", RA-L 2022): J = U U^T with U upper triangular,
+//
+//     U = e^alpha [[e^d1, s12, s13, t1],
+//                  [0,    e^d2, s23, t2],
+//                  [0,    0,    e^d3, t3],
+//                  [0,    0,    0,    1 ]],
+//
+// theta = [alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3]. Every theta is a consistent body (m = e^(2 alpha),
+// ms = m t, Sigma = J's upper-left block), every consistent body has exactly one theta: an estimator
+// working on theta with alpha held at the known mass cannot leave the consistent set.
+inline constexpr int kNumLogCholesky = 10;
+
+// The body parameters [ms_x ms_y ms_z I_xx I_yy I_zz I_xy I_xz I_yz] (BodyParameters::ToVector's order)
+// and the mass of `theta`. Templated on the scalar for Ceres' Jets (the projection below, refinements).
+template <typename T>
+void BodyFromLogCholesky(const T* theta, T* chi, T* mass) {
+  using std::exp;
+  const T scale = exp(theta[0]);
+  // Rows of U / e^alpha (U's last row is e^alpha [0 0 0 1]).
+  const T u[3][4] = {{exp(theta[1]), theta[4], theta[6], theta[7]},
+                     {T(0.0), exp(theta[2]), theta[5], theta[8]},
+                     {T(0.0), T(0.0), exp(theta[3]), theta[9]}};
+  const T scale_sq = scale * scale;
+  T sigma[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      T sum(0.0);
+      for (int k = 0; k < 4; ++k) sum += u[i][k] * u[j][k];
+      sigma[i][j] = scale_sq * sum;
+    }
+  *mass = scale_sq;
+  for (int i = 0; i < 3; ++i) chi[i] = scale_sq * u[i][3];  // J_i3 = U_i3 U_33
+  // I = tr(Sigma) 1 - Sigma; the products are I's entries (I_xy = -Sigma_xy).
+  chi[3] = sigma[1][1] + sigma[2][2];
+  chi[4] = sigma[0][0] + sigma[2][2];
+  chi[5] = sigma[0][0] + sigma[1][1];
+  chi[6] = -sigma[0][1];
+  chi[7] = -sigma[0][2];
+  chi[8] = -sigma[1][2];
+}
+
+// theta of a consistent body (the inverse of BodyFromLogCholesky); throws rotorid::Error naming the
+// problem (CheckPhysicalConsistency) when the body is not consistent.
+Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const BodyParameters& body);
+
+// The consistent body nearest to an estimate in the estimate's own metric: minimises
+// (chi - chi0)^T Cov^-1 (chi - chi0) over the nine body parameters with the mass held, through the
+// log-Cholesky parameterisation (Ceres). `sqrt_information` is a factor L^T of Cov^-1 (rows: residuals,
+// one per independent direction the estimate knows; a parameter it does not know has a zero column
+// and is free). An estimate that is consistent already is its own projection (distance 0).
+struct ConsistentProjection {
+  BodyParameters body;
+  double distance_std = 0.0;  // sqrt of the minimum: the Mahalanobis distance, in std
+  // The largest single-parameter move, in that parameter's std, and its index in ToVector's order.
+  double largest_move_std = 0.0;
+  int largest_move_parameter = -1;
+  bool converged = true;
+};
+// `start`: a consistent body to start from (the one the model predicts with), else the estimate with
+// its negative second moments raised.
+ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParameters& estimate,
+                                                 const Eigen::MatrixXd& sqrt_information,
+                                                 const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
+                                                 const BodyParameters* start = nullptr);
 
 }  // namespace rotorid

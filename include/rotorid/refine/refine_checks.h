@@ -13,6 +13,11 @@
 
 namespace rotorid {
 
+// The refined parameters as the checks read them. Without a covariance (not asked for, as in ablation,
+// or a rank-deficient joint Jacobian: a delay and a lag both near zero are the same to first order)
+// every std is 0 meaning "not known", not "exactly determined".
+CheckedParameters CheckedFromRefinement(const IdentificationResult& linear, const RefineResult& refined);
+
 // `label` names the model in the messages ("refined", "delay,motor_lag", ...). Effects on their
 // bounds are the ones Refine reported (RefineResult::on_bound): an error by default, since a value
 // the bound clipped is not an estimate; ablation, which compares subsets, passes kWarning.

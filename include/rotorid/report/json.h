@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rotorid/ident/checks.h"
 #include "rotorid/ident/identify.h"
 
 namespace rotorid {
@@ -34,6 +35,10 @@ ParameterStatistics ParameterStatisticsOf(const std::vector<std::string>& names,
 // {"value", "std", "rel_std_pct", "essential"} for every parameter of a solution (ParameterStatisticsOf);
 // a discarded one also has "estimate_when_discarded", "most_correlated_with" and "correlation".
 nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSolution& solution);
+// "bodies": per body the model predicts with (AssessBodies): whether it is physical, its centre of mass,
+// principal moments about it and RMS extents, the distance (std) to the nearest physical body and,
+// when it is not one, that body and the likely cause.
+nlohmann::json BodiesJson(const CheckedParameters& parameters);
 // {"Fx": null, "Fy": null, "Fz": 3.2, ...}
 nlohmann::json ComponentsJson(const std::vector<std::optional<double>>& values);
 nlohmann::json VectorJson(const Eigen::VectorXd& v);
