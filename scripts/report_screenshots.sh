@@ -24,27 +24,34 @@ trap 'rm -rf "$TMP"' EXIT
 mkdir -p "$OUT"
 D=data/sim
 
-# shot NAME REPORT_DIR HEIGHT_PX: the top HEIGHT_PX (CSS pixels) of REPORT_DIR/report.html.
+# shot NAME REPORT_DIR HEIGHT_PX [SCALE]: the top HEIGHT_PX (CSS pixels) of REPORT_DIR/report.html.
 shot() {
-  local name=$1 dir=$2 height=$3
-  "$CHROMIUM" --headless --disable-gpu --no-sandbox --hide-scrollbars --force-device-scale-factor="$SCALE" \
+  local name=$1 dir=$2 height=$3 scale=${4:-$SCALE}
+  "$CHROMIUM" --headless --disable-gpu --no-sandbox --hide-scrollbars --force-device-scale-factor="$scale" \
+    --disable-quic --no-first-run --disable-background-networking --disable-component-update --disable-sync \
+    --user-data-dir="$TMP/chromium-profile" \
     --screenshot="$OUT/$name.png" --window-size=1280,"$height" "file://$(realpath "$dir")/report.html" \
     > "$TMP/chromium.log" 2>&1 || { cat "$TMP/chromium.log" >&2; exit 1; }
   echo "$OUT/$name.png: $(du -k "$OUT/$name.png" | cut -f1) KB"
 }
+# first NAME REPORT_DIR: the first screen a reader sees (1280 x 900 at scale 1): the answer.
+first() { shot "$1_first" "$2" 900 1; }
 
 "$R" identify -q --vehicle $D/A.yaml --log $D/A_train.csv --vehicle $D/B.yaml --log $D/B_train.csv \
   --weight 1 --weight 2 --report "$TMP/identify"
 shot report_identify "$TMP/identify" 3300
+first report_identify "$TMP/identify"
 
 "$R" refine -q --vehicle $D/A.yaml --log $D/A_train.csv --vehicle $D/B.yaml --log $D/B_train.csv \
   --weight 1 --weight 2 --validate-vehicle $D/A.yaml --validate-log $D/A_val.csv \
   --validate-vehicle $D/B.yaml --validate-log $D/B_val.csv --report "$TMP/refine"
 shot report_refine "$TMP/refine" 3700
+first report_refine "$TMP/refine"
 
 "$R" diagnose -q --vehicle $D/B.yaml --log $D/B_train.csv --validate-vehicle $D/B.yaml \
   --validate-log $D/B_val.csv --report "$TMP/diagnose"
 shot report_diagnose "$TMP/diagnose" 5400
+first report_diagnose "$TMP/diagnose"
 
 REAL=../shared/data/real/crazyflie-imrc-rpm/brushed/raw/jana01
 if [ -e "$REAL" ]; then

@@ -85,7 +85,8 @@ Command AddDiagnoseCommand(CLI::App& root) {
       throw Error(std::string(e.what()) + "; likely cause: " + FailedCheckMessages(checks));
     }
     progress.reset();
-    for (Check& c : CheckDiagnosis(result, ConfigurationNames(flights))) checks.push_back(std::move(c));
+    for (Check& c : CheckDiagnosis(result, ConfigurationNames(flights), ConfigurationMasses(flights)))
+      checks.push_back(std::move(c));
 
     const nlohmann::json settings = {{"observation", ObservationOptionsJson(diagnosis.identify.observation)},
                                      {"tls", TlsOptionsJson(diagnosis.identify.tls)},

@@ -528,6 +528,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   const internal::AllDataModel all_data{full, diagnosis.linear_parameters,
                                         NamedParameters(full.system, PredictionChi(full.solution)),
                                         internal::EstimatedParameterNames(full)};
+  diagnosis.linear_predicts_with = all_data.predicted;
   internal::ForwardSelection forward = internal::SelectForward(&context, all_data, &timer);
   diagnosis.initial_delay_s = forward.initial_delay_s;
   internal::BackwardElimination backward = internal::EliminateBackward(&context, forward.selected);
@@ -541,6 +542,7 @@ Diagnosis Diagnose(const std::vector<ProcessedFlight>& flights, const std::vecto
   diagnosis.final_effects = final_model.effects;
   diagnosis.final_parameters = final_model.parameters;
   diagnosis.final_parameter_std = final_model.parameter_std;
+  diagnosis.final_predicts_with = final_model.predicted;
   diagnosis.final_model = backward.kept;
   const EffectMask kept = internal::MaskOf(backward.kept);
   const std::vector<EffectKind> kept_kinds = KindsOf(kept);

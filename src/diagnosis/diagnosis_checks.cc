@@ -12,10 +12,15 @@ namespace {
 
 // A parameter the diagnosis discarded is 0 in its map: not estimated. Without a std (empty map) a
 // check counts any violation.
-CheckedParameters Checked(const std::map<std::string, double>& values, const std::map<std::string, double>& std) {
+CheckedParameters Checked(const std::map<std::string, double>& values, const std::map<std::string, double>& std,
+                          const std::map<std::string, double>& predicts_with,
+                          const std::map<std::string, double>& mass_kg) {
   CheckedParameters p;
   p.value = values;
   p.std = std;
+  p.mass_kg = mass_kg;
+  for (const auto& [name, value] : predicts_with)
+    if (const auto it = values.find(name); it != values.end() && it->second != value) p.predicts_with[name] = value;
   for (const auto& [name, value] : values) p.essential[name] = value != 0.0;
   return p;
 }
@@ -29,15 +34,18 @@ constexpr int kSignatureRowSamples = 1000;
 
 }  // namespace
 
-std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs) {
-  std::vector<Check> checks =
-      CheckParameters(Checked(diagnosis.linear_parameters, diagnosis.linear_parameter_std), configs, "linear");
+std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs,
+                                  const std::map<std::string, double>& mass_kg) {
+  std::vector<Check> checks = CheckParameters(
+      Checked(diagnosis.linear_parameters, diagnosis.linear_parameter_std, diagnosis.linear_predicts_with, mass_kg),
+      configs, "linear");
   auto append = [&](std::vector<Check> more) {
     for (Check& c : more) checks.push_back(std::move(c));
   };
   if (!diagnosis.final_model.empty()) {
-    std::vector<Check> final_checks =
-        CheckParameters(Checked(diagnosis.final_parameters, diagnosis.final_parameter_std), configs, "final");
+    std::vector<Check> final_checks = CheckParameters(
+        Checked(diagnosis.final_parameters, diagnosis.final_parameter_std, diagnosis.final_predicts_with, mass_kg),
+        configs, "final");
     ExcuseLinearParameterErrors(std::vector<Check>(checks), final_checks, &checks);
     append(std::move(final_checks));
     bool finite = true;

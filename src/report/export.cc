@@ -83,7 +83,7 @@ void ResolveParameters(const IdentifiedModel& model, const std::map<std::string,
       out->provenance.push_back(name + " = " + ShortNumber(given->second) + ": given by the user (set option)");
     } else if (it != model.parameters.end() && it->second.essential) {
       values[name] = it->second.value;
-    } else if (it != model.parameters.end() && it->second.predicts_with) {
+    } else if (it != model.parameters.end() && it->second.predicts_with && !it->second.predicts_within_range) {
       values[name] = *it->second.predicts_with;
       out->provenance.push_back(name + " = " + ShortNumber(values[name]) +
                                 ": discarded as non-essential; the value the model predicts with");
@@ -94,10 +94,18 @@ void ResolveParameters(const IdentifiedModel& model, const std::map<std::string,
       out->provenance.push_back(name + " = 0: discarded as non-essential; the model predicts with 0");
     }
   }
-  if (!open.empty())
+  if (!open.empty()) {
+    // A body allows a range of it; no flight picked a value in it.
+    const auto first = model.parameters.find(open.front());
+    const std::string range = first != model.parameters.end() && first->second.allowed_range
+                                  ? ", a physically possible body allows " +
+                                        ShortNumber(first->second.allowed_range->first) + " to " +
+                                        ShortNumber(first->second.allowed_range->second)
+                                  : "";
     throw Error(model.source + ": the report does not fix " + Join(open) +
-                " (discarded, and the model predicts with no value of it); " + HowToFix(open.front(), config) +
-                "; or give it with --set " + open.front() + "=VALUE");
+                " (discarded, and the model predicts with no estimate of it" + range + "); " +
+                HowToFix(open.front(), config) + "; or give it with --set " + open.front() + "=VALUE");
+  }
   VehicleParameters& p = out->parameters;
   p.mass_kg = model.vehicle.mass_kg;
   p.rotor = {values["kt"], values["kd"]};
@@ -187,6 +195,11 @@ IdentifiedModel IdentifiedModelFromReport(const nlohmann::json& report, const st
                     entry.value("essential", true)};
     if (entry.contains("predicts_with") && entry["predicts_with"].is_number())
       v.predicts_with = entry["predicts_with"].get<double>();
+    v.predicts_within_range = entry.value("predicts_within_range", false);
+    if (entry.contains("allowed_range") && entry["allowed_range"].is_array() && entry["allowed_range"].size() == 2 &&
+        entry["allowed_range"][0].is_number() && entry["allowed_range"][1].is_number())
+      v.allowed_range =
+          std::make_pair(entry["allowed_range"][0].get<double>(), entry["allowed_range"][1].get<double>());
     model.parameters[name] = v;
   }
   if (!(model.Value("kt") > 0.0)) throw Error(source + ": the report has no positive kt");

@@ -62,6 +62,11 @@ std::vector<std::string> HeaderLines(const ExportModel& model, const ExportHeade
   return lines;
 }
 
+// A stretched X (the TU Delft 3-inch quad's rotors at x +-45.5, y +-63.5 mm sit at 54 degrees) is still
+// that X, its arms written as they are; a plus layout lies 45 degrees from an X's slots, a hexa's
+// neighbours 60 degrees apart.
+constexpr double kLayoutBearingToleranceDeg = 20.0;
+
 double BearingDeg(const Eigen::Vector3d& p_m) { return std::atan2(-p_m.y(), p_m.x()) * 180.0 / M_PI; }
 
 std::optional<std::vector<int>> MatchLayout(const Vehicle& vehicle, const std::vector<RotorSlot>& slots) {
@@ -72,7 +77,9 @@ std::optional<std::vector<int>> MatchLayout(const Vehicle& vehicle, const std::v
     for (int i = 0; i < vehicle.num_rotors(); ++i) {
       const Rotor& r = vehicle.rotors[static_cast<size_t>(i)];
       const double difference = std::remainder(BearingDeg(r.position_m) - slot.bearing_deg, 360.0);
-      if (r.position_m.head<2>().norm() > 0.0 && std::abs(difference) < 1.0 && r.spin == slot.spin) found = i;
+      if (r.position_m.head<2>().norm() > 0.0 && std::abs(difference) < kLayoutBearingToleranceDeg &&
+          r.spin == slot.spin)
+        found = i;
     }
     if (found < 0) return std::nullopt;
     match.push_back(found);

@@ -38,7 +38,7 @@ struct RotorSlot {
   double bearing_deg;
   int spin;
 };
-// For each slot, the index of the vehicle's rotor at that bearing (within 1 degree) turning that
+// For each slot, the index of the vehicle's rotor at that bearing (within 20 degrees) turning that
 // way; empty when the vehicle is not that layout.
 std::optional<std::vector<int>> MatchLayout(const Vehicle& vehicle, const std::vector<RotorSlot>& slots);
 // Bearing of a point of F_d, as RotorSlot::bearing_deg.

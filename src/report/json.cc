@@ -45,6 +45,8 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
     const int i = static_cast<int>(k);
     if (PredictsWithProfiled(solution, i) || solution.PredictsWithinRange(i))
       entry["predicts_with"] = JsonNumber(predicted[i]);
+    // Not an estimate: a value inside the range a body allows, the estimate lying outside it or absent.
+    if (solution.PredictsWithinRange(i)) entry["predicts_within_range"] = true;
     // The values a physical body allows a discarded inertia (the others as predicted with).
     if (solution.HasAllowedRange(i))
       entry["allowed_range"] = {JsonNumber(solution.allowed_low[i]), JsonNumber(solution.allowed_high[i])};

@@ -318,8 +318,10 @@ TEST(ValidateCliTest, PredictsWithTheDiscardedInertiaTheModelEstimated) {
 
   report["linear"]["parameters"]["CF.I_zz"].erase("predicts_with");
   std::ofstream(path("held_at_zero.json")) << report.dump();
+  // Held at 0, I_zz makes no body with these I_xx, I_yy: validate says so (exit 3, the report written).
   const auto at_zero = run({"validate", "--params", path("held_at_zero.json"), "--json", path("z.json")});
-  ASSERT_EQ(at_zero.exit_code, 0) << at_zero.err;
+  ASSERT_EQ(at_zero.exit_code, 3) << at_zero.err;
+  EXPECT_NE(at_zero.err.find("physical_consistency"), std::string::npos) << at_zero.err;
   EXPECT_GT(std::abs(LoadJson(path("z.json"))["relative_error_pct"]["Mx"].get<double>() - table["Mx"].get<double>()),
             1e-3);
 }

@@ -269,6 +269,10 @@ struct Diagnosis {
   // physical checks count a violation only beyond 3 std.
   std::map<std::string, double> linear_parameter_std;
   std::map<std::string, double> final_parameter_std;
+  // What each model predicts with (PredictionChi: a discarded inertia within the range a body allows),
+  // which physical_consistency checks.
+  std::map<std::string, double> linear_predicts_with;
+  std::map<std::string, double> final_predicts_with;
   Effects final_effects;
   Effects final_effects_std;
   std::vector<ConfoundedEffects> confounded;

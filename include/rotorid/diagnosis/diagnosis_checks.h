@@ -8,8 +8,10 @@
 namespace rotorid {
 
 // The plausibility checks (rotorid/ident/checks.h) of a diagnosis: the linear and the final
-// parameters (values only: the diagnosis keeps no std), finite effects, held-out Table III.
-std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs);
+// parameters (values only: the diagnosis keeps no std), each with physical_consistency of the
+// configurations in `mass_kg` (ConfigurationMasses), finite effects, held-out Table III.
+std::vector<Check> CheckDiagnosis(const Diagnosis& diagnosis, const std::vector<std::string>& configs,
+                                  const std::map<std::string, double>& mass_kg);
 
 // Whether the linear model's residual shows the signature of an unmodelled effect: each candidate
 // of `options` that the flights can carry is fitted alone to first order at the TLS solution (the

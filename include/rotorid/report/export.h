@@ -31,6 +31,10 @@ struct ExportedValue {
   // The value the model predicts with when it is not `value` (a discarded inertia the TLS still
   // estimates: the report's `predicts_with`).
   std::optional<double> predicts_with = std::nullopt;
+  // predicts_with is no estimate but a value inside the range a physical body allows (the report's
+  // predicts_within_range, with allowed_range): the flights do not fix the parameter.
+  std::optional<std::pair<double, double>> allowed_range = std::nullopt;
+  bool predicts_within_range = false;
 };
 
 // A check of the report whose status is "error".
