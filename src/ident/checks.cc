@@ -58,6 +58,19 @@ std::string VehicleFile(const Vehicle& vehicle) {
   return vehicle.source.empty() ? "the vehicle file of '" + vehicle.name + "'" : vehicle.source;
 }
 
+// The smallest distance between two rotors in the rotor plane, coaxial pairs left out (0 when every
+// rotor shares one axis): no propeller is wider.
+double RotorSpacing(const Vehicle& vehicle) {
+  double spacing = 0.0;
+  const double coaxial_m = 0.05 * vehicle.MeanArm();
+  for (size_t i = 0; i < vehicle.rotors.size(); ++i)
+    for (size_t j = i + 1; j < vehicle.rotors.size(); ++j) {
+      const double d = (vehicle.rotors[i].position_m - vehicle.rotors[j].position_m).head<2>().norm();
+      if (d > coaxial_m && (spacing == 0.0 || d < spacing)) spacing = d;
+    }
+  return spacing;
+}
+
 // What one flight shows, at its IDIM row samples.
 struct FlightMetrics {
   double gravity = kStandardGravity;
@@ -68,6 +81,7 @@ struct FlightMetrics {
   double thrust_variation_pct = 0.0;
   double thrust_force_correlation = 0.0;  // of sum Omega_i^2 with s_z
   double arm_m = 0.0;                     // mean rotor distance from the z axis
+  double spacing_m = 0.0;                 // smallest distance between two rotors off each other's axis
   bool rotor_is_speed = true;             // a speed (measured, or a command through the vehicle's map)
   bool rotor_is_measured_speed = true;
   // Least-squares angular acceleration per unit Omega_i^2 variation (3 x rotors).
@@ -101,6 +115,7 @@ FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
     m.thrust_variation_pct = 100.0 * std::sqrt((thrust.array() - m.thrust_mean).square().mean()) / m.thrust_mean;
   m.thrust_force_correlation = Correlation(thrust, force_z);
   m.arm_m = f.vehicle.MeanArm();
+  m.spacing_m = RotorSpacing(f.vehicle);
   // Centred regression (the intercept takes gyroscopic and first-moment terms that do not vary
   // with a single rotor); a tiny ridge keeps it defined when a rotor never varies.
   x.rowwise() -= x.colwise().mean();
@@ -187,17 +202,28 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   auto coefficient = [&](double mass, double arm, double thrust_mean) {
     return mass * m.gravity / thrust_mean * 4.0 * M_PI * M_PI / (kAirDensityKgpm3 * std::pow(arm, 4));
   };
+  // The same over the rotor spacing (positions scale with the arm).
+  const double spacing_over_arm = m.spacing_m > 0.0 ? m.spacing_m / r : 0.0;
+  auto spacing_coefficient = [&](double mass, double arm, double thrust_mean) {
+    return coefficient(mass, arm, thrust_mean) / std::pow(spacing_over_arm, 4);
+  };
   auto fits = [&](double mass, double arm, double thrust_mean) {
     const double d = density(mass, arm), c = coefficient(mass, arm, thrust_mean);
     return d >= t.density_low_kgpm3 && d <= t.density_high_kgpm3 &&
-           (!m.rotor_is_speed || (c >= t.thrust_coefficient_low && c <= t.thrust_coefficient_high));
+           (!m.rotor_is_speed || (c >= t.thrust_coefficient_low && c <= t.thrust_coefficient_high &&
+                                  (spacing_over_arm == 0.0 ||
+                                   spacing_coefficient(mass, arm, thrust_mean) <= t.spacing_thrust_coefficient_high)));
   };
   const double mass = v.mass_kg, thrust = m.thrust_mean;
   const std::string measured =
       "mass " + ShortNumber(mass) + " kg, arm " + ShortNumber(r) + " m: m/r^3 " + ShortNumber(density(mass, r)) +
       " kg/m^3" +
       (m.rotor_is_speed ? ", kt from hover " + ShortNumber(mass * m.gravity / thrust) +
-                              " N s^2 = " + ShortNumber(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)"
+                              " N s^2 = " + ShortNumber(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)" +
+                              (spacing_over_arm > 0.0
+                                   ? " = " + ShortNumber(spacing_coefficient(mass, r, thrust)) +
+                                         " rho d^4 / (4 pi^2) with d " + ShortNumber(m.spacing_m) + " m between rotors"
+                                   : "")
                         : "");
   if (fits(mass, r, thrust)) {
     *plausible_kt = m.rotor_is_speed;
@@ -212,10 +238,36 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   else if (m.rotor_is_speed && fits(mass, r, rpm_thrust))
     cause = "the rotor speeds of " + source + " appear to be in rpm: give |Omega| in rad/s (multiply by " +
             ShortNumber(kRpmToRadps) + ")";
+  else if (m.rotor_is_speed && fits(mass, r, thrust * 4.0 * M_PI * M_PI))
+    cause = "the rotor speeds of " + source +
+            " appear to be in rev/s (kt would be 39.5 times what propellers of this size give): give |Omega| in "
+            "rad/s (multiply by 2 pi; a column map: unit rev/s)";
   else
     cause = "mass, rotor positions and rotor speeds do not fit a multirotor: check their units (kg, m, rad/s) in " +
             VehicleFile(v) + " and " + source;
   return {"vehicle_scale", CheckStatus::kError, cause + " (" + measured + ")"};
+}
+
+// The rotation about z that best turns the predicted roll/pitch pattern into the measured one (2-D
+// Procrustes over the rotors): an IMU yawed against the body (board alignment) or an X layout
+// flown as + correlates at cos 45 deg = 0.71 per axis, which the pattern check accepts. Differing
+// roll and pitch inertia do not bias it on symmetric layouts.
+Check ImuYawCheck(const FlightMetrics& m, const Eigen::MatrixXd& predicted, const FlightData& raw,
+                  const InputCheckThresholds& t) {
+  const auto centred = [](const Eigen::MatrixXd& x, int axis) -> Eigen::VectorXd {
+    return x.row(axis).transpose().array() - x.row(axis).mean();
+  };
+  const Eigen::VectorXd p_roll = centred(predicted, 0), p_pitch = centred(predicted, 1);
+  const Eigen::VectorXd b_roll = centred(m.moment_pattern, 0), b_pitch = centred(m.moment_pattern, 1);
+  const double dot = p_roll.dot(b_roll) + p_pitch.dot(b_pitch), cross = p_roll.dot(b_pitch) - p_pitch.dot(b_roll);
+  const double yaw_deg = std::atan2(cross, dot) * kRadToDeg;
+  const std::string measured = "the rotor moments turned " + ShortNumber(yaw_deg) +
+                               " deg about z from what the rotor positions of " + VehicleFile(raw.vehicle) + " give";
+  if (std::abs(yaw_deg) <= t.imu_yaw_deg) return {"imu_yaw", CheckStatus::kOk, raw.log.source + ": " + measured};
+  return {"imu_yaw", m.rotor_is_measured_speed ? CheckStatus::kError : CheckStatus::kWarning,
+          raw.log.source + ": the IMU appears yawed against the rotors (" + measured +
+              "): rotate the gyro and accelerometer into the body frame (the board's mounting), or fix the layout in " +
+              VehicleFile(raw.vehicle) + " (an X vehicle given as +, or the reverse)"};
 }
 
 // Which rotor makes which moment: the measured pattern against the vehicle file's positions and
@@ -267,6 +319,7 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
                             ": check the rotor order and positions (" + measured + ")"});
     return checks;
   }
+  checks.push_back(ImuYawCheck(m, predicted, raw, t));
   if (!plausible_kt) return checks;
   // Angular acceleration per unit Omega_i^2 is kt y_i / I_xx (roll) and -kt x_i / I_yy (pitch).
   const double kt = v.mass_kg * m.gravity / m.thrust_mean, reference = v.mass_kg * m.arm_m * m.arm_m;
@@ -278,16 +331,19 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
   }
   const double ratio = std::exp(log_ratio);
   const std::string inertia = "apparent roll/pitch inertia from the rotor moments " + ShortNumber(ratio) + " m r^2";
-  if (ratio >= t.inertia_ratio_low && ratio <= t.inertia_ratio_high) {
+  const double high = m.rotor_is_measured_speed ? t.inertia_ratio_high_measured_speed : t.inertia_ratio_high;
+  const auto plausible = [&](double value) { return value >= t.inertia_ratio_low && value <= high; };
+  if (plausible(ratio)) {
     checks.push_back({"gyro_units", CheckStatus::kOk, source + ": " + inertia});
   } else {
-    const bool degrees = ratio * kRadToDeg >= t.inertia_ratio_low && ratio * kRadToDeg <= t.inertia_ratio_high;
-    checks.push_back({"gyro_units", CheckStatus::kError,
-                      source + ": " +
-                          (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
-                                         ShortNumber(kDegToRad) + ")"
-                                   : "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)") +
-                          " (" + inertia + ")"});
+    std::string cause = "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)";
+    if (plausible(ratio * kRadToDeg))
+      cause = "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " + ShortNumber(kDegToRad) + ")";
+    else if (plausible(ratio * kDegToRad))
+      cause =
+          "the gyro reads 57 times too little: rad/s data converted as deg/s (a column map's gyro unit: rad/s, "
+          "not deg/s)";
+    checks.push_back({"gyro_units", CheckStatus::kError, source + ": " + cause + " (" + inertia + ")"});
   }
   return checks;
 }

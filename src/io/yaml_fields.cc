@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <set>
+#include <vector>
 
 #include "rotorid/core/error.h"
 
@@ -9,32 +10,40 @@ namespace rotorid::internal {
 
 namespace {
 
-// yaml-cpp keeps both entries of a repeated key and lookups see only one: an error instead.
-void RejectDuplicateKeys(const std::string& source, const YAML::Node& node) {
-  if (node.IsSequence()) {
-    for (const YAML::Node& item : node) RejectDuplicateKeys(source, item);
-  } else if (node.IsMap()) {
-    std::set<std::string> keys;
-    for (const auto& entry : node) {
-      if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second)
-        FailAt(source, entry.first, "duplicate key '" + entry.first.Scalar() + "'");
-      RejectDuplicateKeys(source, entry.second);
+// Walks the tree as its readers will, aliases expanded, within a budget of nodes. yaml-cpp keeps
+// both entries of a repeated key and lookups see only one: an error instead.
+class TreeCheck {
+ public:
+  TreeCheck(const std::string& source, size_t text_size) : source_(source), budget_(2 * text_size + 1000) {}
+
+  void Visit(const YAML::Node& node, int depth = 0) {
+    if (++visited_ > budget_)
+      FailAt(source_, node,
+             "aliases (*name) expand this document beyond " + std::to_string(budget_) +
+                 " nodes: write the values out instead of repeating anchors");
+    // Anchors chained through aliases nest without bound (and each reader recurses).
+    if (depth > kMaxDepth) FailAt(source_, node, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    if (node.IsSequence()) {
+      for (const YAML::Node& item : node) Visit(item, depth + 1);
+    } else if (node.IsMap()) {
+      std::set<std::string> keys;
+      for (const auto& entry : node) {
+        Visit(entry.first, depth + 1);
+        if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second)
+          FailAt(source_, entry.first, "duplicate key '" + entry.first.Scalar() + "'");
+        Visit(entry.second, depth + 1);
+      }
     }
   }
-}
+
+ private:
+  static constexpr int kMaxDepth = 200;
+  const std::string& source_;
+  const size_t budget_;
+  size_t visited_ = 0;
+};
 
 }  // namespace
-
-YAML::Node LoadYaml(const std::string& text, const std::string& source) {
-  try {
-    YAML::Node root = YAML::Load(text);
-    RejectDuplicateKeys(source, root);
-    return root;
-  } catch (const YAML::Exception& e) {
-    throw Error(Located(source, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1,
-                        "not valid YAML: " + e.msg));
-  }
-}
 
 void FailAt(const std::string& source, const YAML::Node& node, const std::string& message) {
   const YAML::Mark mark = node.Mark();
@@ -50,3 +59,28 @@ double ReadYamlNumber(const std::string& source, const YAML::Node& node, const s
 }
 
 }  // namespace rotorid::internal
+
+namespace rotorid {
+
+YAML::Node LoadYaml(const std::string& text, const std::string& source) {
+  try {
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+    if (documents.size() > 1)
+      internal::FailAt(
+          source, documents[1],
+          "a second YAML document ('---'): rotorid reads one document per file; remove the second or give it "
+          "its own file");
+    const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
+    internal::TreeCheck(source, text.size()).Visit(root);
+    return root;
+  } catch (const YAML::Exception& e) {
+    throw Error(Located(source, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1,
+                        "not valid YAML: " + e.msg));
+  }
+}
+
+YAML::Node LoadYamlFile(const std::string& path, std::uint64_t max_bytes) {
+  return LoadYaml(ReadFile(path, max_bytes), path);
+}
+
+}  // namespace rotorid

@@ -39,13 +39,23 @@ struct InputCheckThresholds {
   // kt from hover (m g / mean sum Omega^2) over rho r^4 / (4 pi^2): a thrust coefficient C_T (D/r)^4.
   double thrust_coefficient_low = 2e-3;
   double thrust_coefficient_high = 3.0;
+  // kt from hover over rho d^4 / (4 pi^2), d the smallest distance between two rotors (the largest
+  // propeller diameter that fits): the C_T propellers of that size would need. Real propellers
+  // stay below 0.2; a rotor speed in rev/s reads 39.5x high (sim A 0.011 -> 0.44, Crazyflie 0.036).
+  double spacing_thrust_coefficient_high = 0.25;
   // Apparent roll/pitch inertia (from the rotor moments and the gyro) over m r^2.
   double inertia_ratio_low = 0.01;
   // 50, not 5: jana00 (figure 8, little roll/pitch excitation) reads 4.5 with the RPM deck and 16.7
   // through the PWM map; a gyro in deg/s reads 57x low, which the lower bound catches.
   double inertia_ratio_high = 50.0;
+  // With a measured rotor speed (no command map blurring the pattern), real flights read at most
+  // 4.5 (jana00); rad/s data declared deg/s read 57x high (sim A 0.28 -> 16).
+  double inertia_ratio_high_measured_speed = 8.0;
   // The rotor-moment pattern fits the vehicle file when its correlation exceeds this per axis.
   double pattern_correlation_ok = 0.4;
+  // The rotor moments may turn at most this far (deg) about z from the rotor positions' pattern:
+  // an IMU yawed 45 deg, or an X vehicle given as +, turns it 45 deg.
+  double imu_yaw_deg = 15.0;
   // A transposition of two rotors is named when it fits with at least this correlation (and by 0.5
   // better than the file's order).
   double swap_correlation = 0.8;
