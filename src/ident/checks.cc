@@ -86,7 +86,42 @@ struct FlightMetrics {
   bool rotor_is_measured_speed = true;
   // Least-squares angular acceleration per unit Omega_i^2 variation (3 x rotors).
   Eigen::MatrixXd moment_pattern;
+  // The rotation about z (deg) that best turns the roll/pitch moments the rotor positions predict
+  // (sum_i (y_i, -x_i) Omega_i^2, up to kt / I) into the measured angular acceleration (MeasureMomentYaw).
+  double moment_yaw_deg = 0.0;
+  double moment_yaw_correlation = 0.0;  // of the turned moments with the angular acceleration
 };
+
+// The rotation about z that best turns the roll/pitch moments the rotor positions predict into the
+// measured angular acceleration (2-D Procrustes over the samples), at the time shift within 0.1 s
+// that fits best: when the tilt direction circles, a delay of the rotor signal alone turns the
+// moments by 2 pi f delay (PWM commands of eckart34: -28 deg unshifted, 0.3 deg shifted).
+void MeasureMomentYaw(const ProcessedFlight& f, FlightMetrics* m) {
+  if (f.row_samples.empty() || !(f.dt_s > 0.0)) return;
+  const int first = f.row_samples.front(), n = f.row_samples.back() - first + 1, rotors = f.vehicle.num_rotors();
+  Eigen::VectorXd arm_y(rotors), arm_x(rotors);
+  for (int i = 0; i < rotors; ++i)
+    arm_y[i] = f.vehicle.rotors[i].position_m.y(), arm_x[i] = f.vehicle.rotors[i].position_m.x();
+  const Eigen::MatrixXd thrusts = f.rotor.middleRows(first, n).array().square().matrix();
+  Eigen::MatrixX2d moment(n, 2), acceleration = f.angular_acceleration.middleRows(first, n).leftCols(2);
+  moment << thrusts * arm_y, -(thrusts * arm_x);
+  moment.rowwise() -= moment.colwise().mean();
+  acceleration.rowwise() -= acceleration.colwise().mean();
+  const int max_shift = std::min(static_cast<int>(std::lround(0.1 / f.dt_s)), n / 4);
+  for (int shift = -max_shift; shift <= max_shift; ++shift) {
+    const int length = n - std::abs(shift);
+    const auto a = moment.middleRows(std::max(0, -shift), length);
+    const auto b = acceleration.middleRows(std::max(0, shift), length);
+    const double dot = a.col(0).dot(b.col(0)) + a.col(1).dot(b.col(1));
+    const double cross = a.col(0).dot(b.col(1)) - a.col(1).dot(b.col(0));
+    const double norms = std::sqrt(a.squaredNorm() * b.squaredNorm());
+    const double correlation = norms > 0.0 ? std::hypot(dot, cross) / norms : 0.0;
+    if (dot > 0.0 && correlation > m->moment_yaw_correlation) {
+      m->moment_yaw_correlation = correlation;
+      m->moment_yaw_deg = std::atan2(cross, dot) * kRadToDeg;
+    }
+  }
+}
 
 FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
   FlightMetrics m;
@@ -120,6 +155,7 @@ FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
   // with a single rotor); a tiny ridge keeps it defined when a rotor never varies.
   x.rowwise() -= x.colwise().mean();
   y.rowwise() -= y.colwise().mean();
+  MeasureMomentYaw(f, &m);
   Eigen::MatrixXd normal = x.transpose() * x;
   normal.diagonal().array() += 1e-12 * std::max(normal.diagonal().maxCoeff(), 1e-300);
   m.moment_pattern = normal.ldlt().solve(x.transpose() * y).transpose();
@@ -248,21 +284,16 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   return {"vehicle_scale", CheckStatus::kError, cause + " (" + measured + ")"};
 }
 
-// The rotation about z that best turns the predicted roll/pitch pattern into the measured one (2-D
-// Procrustes over the rotors): an IMU yawed against the body (board alignment) or an X layout
-// flown as + correlates at cos 45 deg = 0.71 per axis, which the pattern check accepts. Differing
-// roll and pitch inertia do not bias it on symmetric layouts.
-Check ImuYawCheck(const FlightMetrics& m, const Eigen::MatrixXd& predicted, const FlightData& raw,
-                  const InputCheckThresholds& t) {
-  const auto centred = [](const Eigen::MatrixXd& x, int axis) -> Eigen::VectorXd {
-    return x.row(axis).transpose().array() - x.row(axis).mean();
-  };
-  const Eigen::VectorXd p_roll = centred(predicted, 0), p_pitch = centred(predicted, 1);
-  const Eigen::VectorXd b_roll = centred(m.moment_pattern, 0), b_pitch = centred(m.moment_pattern, 1);
-  const double dot = p_roll.dot(b_roll) + p_pitch.dot(b_pitch), cross = p_roll.dot(b_pitch) - p_pitch.dot(b_roll);
-  const double yaw_deg = std::atan2(cross, dot) * kRadToDeg;
+// The rotor moments against the angular acceleration, turned about z (MeasureMomentYaw): an IMU
+// yawed against the body (board alignment) or an X layout flown as + correlates at cos 45 deg =
+// 0.71 per axis, which the pattern check accepts. Fitted on the samples, not on the per-rotor
+// pattern, whose regression is ill-conditioned when the rotors move together; differing roll and
+// pitch inertia bias it only as far as roll and pitch moments correlate.
+Check ImuYawCheck(const FlightMetrics& m, const FlightData& raw, const InputCheckThresholds& t) {
+  const double yaw_deg = m.moment_yaw_deg;
   const std::string measured = "the rotor moments turned " + ShortNumber(yaw_deg) +
-                               " deg about z from what the rotor positions of " + VehicleFile(raw.vehicle) + " give";
+                               " deg about z from what the rotor positions of " + VehicleFile(raw.vehicle) +
+                               " give, correlation " + ShortNumber(m.moment_yaw_correlation);
   if (std::abs(yaw_deg) <= t.imu_yaw_deg) return {"imu_yaw", CheckStatus::kOk, raw.log.source + ": " + measured};
   return {"imu_yaw", m.rotor_is_measured_speed ? CheckStatus::kError : CheckStatus::kWarning,
           raw.log.source + ": the IMU appears yawed against the rotors (" + measured +
@@ -319,7 +350,7 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
                             ": check the rotor order and positions (" + measured + ")"});
     return checks;
   }
-  checks.push_back(ImuYawCheck(m, predicted, raw, t));
+  checks.push_back(ImuYawCheck(m, raw, t));
   if (!plausible_kt) return checks;
   // Angular acceleration per unit Omega_i^2 is kt y_i / I_xx (roll) and -kt x_i / I_yy (pitch).
   const double kt = v.mass_kg * m.gravity / m.thrust_mean, reference = v.mass_kg * m.arm_m * m.arm_m;
