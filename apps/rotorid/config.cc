@@ -36,9 +36,11 @@ class YamlConfig : public CLI::Config {
     if (text.size() > kMaxYamlFileBytes)
       throw CLI::ConfigError("--config: larger than " + std::to_string(kMaxYamlFileBytes >> 20) +
                              " MB: is it the right file?");
+    const CLI::Option* option = root_->get_config_ptr();
+    const std::string source = option != nullptr && option->count() > 0 ? option->as<std::string>() : "--config";
     YAML::Node root;
     try {
-      root = LoadYaml(text, "--config");
+      root = LoadYaml(text, source);
     } catch (const Error& e) {
       throw CLI::ConfigError(e.what());
     }

@@ -79,7 +79,11 @@ nlohmann::json BatchEntry::OptionsJson() const {
 
 std::vector<BatchEntry> ReadBatchManifest(const std::string& path) {
   // A manifest lists thousands of logs: 4 MB, about 50 000 entries.
-  const YAML::Node root = internal::LoadYamlFile(path, std::uint64_t{4} << 20);
+  return ParseBatchManifest(ReadFile(path, std::uint64_t{4} << 20), path);
+}
+
+std::vector<BatchEntry> ParseBatchManifest(const std::string& text, const std::string& path) {
+  const YAML::Node root = internal::LoadYaml(text, path);
   if (!root.IsMap() || !root["logs"] || !root["logs"].IsSequence())
     throw Error(path + ": a manifest is a map with 'logs:', a list of {vehicle, log, window, options}");
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();

@@ -74,7 +74,7 @@ class CliRobustnessTest : public ::testing::Test {
   static std::string EditedLog(const std::string& name, const std::function<void(std::vector<double>*)>& edit) {
     std::istringstream in(Slurp(Log()));
     std::ostringstream out;
-    out.precision(10);
+    out.precision(17);
     bool header_seen = false;
     for (std::string line; std::getline(in, line);) {
       if (line.empty() || line[0] == '#' || !header_seen) {
@@ -193,6 +193,20 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "IMU appears yawed") && Contains(r.err, "yawed.csv")) << r.err;
 
+  // UNIX-epoch time stamps (2.4e-7 s resolution), and a 50 Hz log at the default 10 Hz cut-off.
+  const std::string epoch = EditedLog("epoch.csv", [](std::vector<double>* row) { (*row)[0] += 1.7e9; });
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", epoch, "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check time_base") && Contains(r.err, "epoch.csv")) << r.err;
+  const std::string slow = Dir() + "/slow.csv";
+  r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--rate", "50", "--out", slow, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", slow, "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check sample_rate") && Contains(r.err, "--cutoff-hz 2.5")) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", slow, "--cutoff-hz", "2.5", "--quiet"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+
   // The same flight in rad/s, IMU aligned, passes every check.
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Log(), "--quiet"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -215,7 +229,7 @@ TEST_F(CliRobustnessTest, YamlAliasBombsAndExtraDocumentsAreRefused) {
       {{"identify", "--vehicle", vehicle, "--log", Log()}, vehicle},
       {{"identify", "--vehicle", Vehicle(), "--log", Log(), "--column-map", map}, map},
       {{"batch", "--manifest", manifest, "--out", Dir() + "/bomb.jsonl"}, manifest},
-      {{"identify", "--vehicle", Vehicle(), "--log", Log(), "--config", config}, "--config"},
+      {{"identify", "--vehicle", Vehicle(), "--log", Log(), "--config", config}, config},
   };
   for (const auto& [args, file] : cases) {
     const auto r = RunRotorid(args);

@@ -36,6 +36,8 @@ struct BatchEntry {
 
 // Throws rotorid::Error naming the manifest, line and column of what is wrong.
 std::vector<BatchEntry> ReadBatchManifest(const std::string& path);
+// The manifest `text` of the file `path` (relative paths are taken from its folder).
+std::vector<BatchEntry> ParseBatchManifest(const std::string& text, const std::string& path);
 
 struct BatchShard {
   int index = 1;  // 1-based
