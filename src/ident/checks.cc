@@ -90,7 +90,9 @@ struct FlightMetrics {
   // The rotation about z (deg) that best turns the roll/pitch moments the rotor positions predict
   // (sum_i (y_i, -x_i) Omega_i^2, up to kt / I) into the measured angular acceleration (MeasureMomentYaw).
   double moment_yaw_deg = 0.0;
-  double moment_yaw_correlation = 0.0;  // of the turned moments with the angular acceleration
+  double moment_yaw_correlation = 0.0;
+  // Per rotor, mean and standard deviation of Omega_i^2 over the rows.
+  Eigen::VectorXd rotor_square_mean, rotor_square_std;  // of the turned moments with the angular acceleration
 };
 
 // The rotation about z that best turns the roll/pitch moments the rotor positions predict into the
@@ -147,6 +149,9 @@ FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f) {
   m.gyro_median = Median(gyro);
   m.angular_velocity_rms = std::sqrt(m.angular_velocity_rms / std::max(rows, 1));
   m.thrust_mean = thrust.mean();
+  m.rotor_square_mean = x.colwise().mean().transpose();
+  m.rotor_square_std =
+      ((x.rowwise() - x.colwise().mean()).colwise().squaredNorm() / std::max(rows, 1)).cwiseSqrt().transpose();
   if (m.thrust_mean > 0.0)
     m.thrust_variation_pct = 100.0 * std::sqrt((thrust.array() - m.thrust_mean).square().mean()) / m.thrust_mean;
   m.thrust_force_correlation = Correlation(thrust, force_z);
@@ -213,6 +218,30 @@ Check MotionCheck(const FlightMetrics& m, const std::string& source, const Input
                 "): it cannot determine inertia or kt; identify on a flight with roll, pitch, yaw and thrust changes "
                 "(docs/tutorial.md)"};
   return {"motion", CheckStatus::kOk, source + ": " + measured};
+}
+
+// A rotor column that reads (nearly) nothing, or never changes, while the others fly: a dead rotor
+// or an unlogged column, which the regression would absorb silently (rotor 3 of sim A all zeros: kt
+// +31 %, kd and I_zz 0, every other check ok).
+Check RotorSignalCheck(const FlightMetrics& m, const std::string& source) {
+  constexpr double kDeadShare = 0.1, kStuckShare = 0.01;  // of the median rotor's mean, and std
+  const auto median = [](const Eigen::VectorXd& v) {
+    return Median(std::vector<double>(v.data(), v.data() + v.size()));
+  };
+  const double typical_mean = median(m.rotor_square_mean), typical_std = median(m.rotor_square_std);
+  for (Eigen::Index i = 0; i < m.rotor_square_mean.size(); ++i) {
+    const std::string rotor = "rotor_" + std::to_string(i + 1);
+    if (m.rotor_square_mean[i] < kDeadShare * typical_mean)
+      return {"rotor_signal", CheckStatus::kError,
+              source + ": " + rotor + " reads " + ShortNumber(std::sqrt(m.rotor_square_mean[i])) +
+                  " RMS while the median rotor reads " + ShortNumber(std::sqrt(typical_mean)) +
+                  ": a dead rotor or an empty column; give its speeds, or fly a vehicle file without it"};
+    if (m.rotor_square_std[i] < kStuckShare * typical_std)
+      return {
+          "rotor_signal", CheckStatus::kError,
+          source + ": " + rotor + " never changes while the others do: a stuck or constant column; give its speeds"};
+  }
+  return {"rotor_signal", CheckStatus::kOk, source + ": every rotor column varies with the others"};
 }
 
 // Airborne, the vertical specific force follows the thrust; on the ground it stays at g.
@@ -392,6 +421,7 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     const Check acc = AccelerometerCheck(m, source, thresholds), motion = MotionCheck(m, source, thresholds);
     checks.push_back(acc);
     checks.push_back(motion);
+    if (motion.status != CheckStatus::kError) checks.push_back(RotorSignalCheck(m, source));
     // The checks below read the rotor data against the IMU: only once the IMU and motion are sane.
     if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError) continue;
     const Check airborne = AirborneCheck(m, source);

@@ -1,8 +1,9 @@
 #include "io/yaml_fields.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
-#include <vector>
+#include <string_view>
 
 #include "rotorid/core/error.h"
 
@@ -43,6 +44,37 @@ class TreeCheck {
   size_t visited_ = 0;
 };
 
+// The line (1-based) where a second document starts, 0 when there is none: a `---` after content, or
+// content after a `...` end marker. By the lines, since yaml-cpp 0.7's LoadAll never returns on some
+// inputs (",e,").
+int SecondDocumentLine(const std::string& text) {
+  // Whether `line` from `from` on holds more than blanks and a comment.
+  const auto holds_content = [](std::string_view line, size_t from) {
+    const size_t first = line.find_first_not_of(" \t\r", from);
+    return first != std::string_view::npos && line[first] != '#';
+  };
+  bool content = false, ended = false;
+  int number = 0;
+  for (size_t start = 0; start < text.size(); ++number) {
+    const size_t end = std::min(text.find('\n', start), text.size());
+    const std::string_view line(text.data() + start, end - start);
+    start = end + 1;
+    const auto marker = [&line](const char* m) {
+      return line.compare(0, 3, m) == 0 && (line.size() == 3 || line[3] == ' ' || line[3] == '\t' || line[3] == '\r');
+    };
+    if (marker("---")) {
+      if (content || ended) return number + 1;
+      content = holds_content(line, 3);
+    } else if (marker("...")) {
+      ended = content;
+    } else if (!line.empty() && line[0] != '%' && holds_content(line, 0)) {
+      if (ended) return number + 1;
+      content = true;
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 void FailAt(const std::string& source, const YAML::Node& node, const std::string& message) {
@@ -63,14 +95,12 @@ double ReadYamlNumber(const std::string& source, const YAML::Node& node, const s
 namespace rotorid {
 
 YAML::Node LoadYaml(const std::string& text, const std::string& source) {
+  if (const int line = internal::SecondDocumentLine(text); line > 0)
+    throw Error(Located(source, line, 1,
+                        "a second YAML document: rotorid reads one document per file; remove it or give it its own "
+                        "file"));
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
-    if (documents.size() > 1)
-      internal::FailAt(
-          source, documents[1],
-          "a second YAML document ('---'): rotorid reads one document per file; remove the second or give it "
-          "its own file");
-    const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
+    const YAML::Node root = YAML::Load(text);
     internal::TreeCheck(source, text.size()).Visit(root);
     return root;
   } catch (const YAML::Exception& e) {
