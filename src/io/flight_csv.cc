@@ -22,16 +22,18 @@ namespace {
 
 using internal::TrimSpaces;
 
+// Spreadsheets quote cells ("t","gyro_x"; "0.01"): the quotes are not part of the value.
+std::string_view Unquoted(std::string_view cell) {
+  return cell.size() >= 2 && cell.front() == '"' && cell.back() == '"' ? cell.substr(1, cell.size() - 2) : cell;
+}
+
 std::vector<std::string_view> SplitCells(std::string_view line) {
   std::vector<std::string_view> cells;
   size_t start = 0;
   while (true) {
     const size_t comma = line.find(',', start);
-    std::string_view cell =
-        TrimSpaces(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
-    // Spreadsheets quote cells ("t","gyro_x"; "0.01"): the quotes are not part of the value.
-    if (cell.size() >= 2 && cell.front() == '"' && cell.back() == '"') cell = cell.substr(1, cell.size() - 2);
-    cells.push_back(cell);
+    cells.push_back(Unquoted(
+        TrimSpaces(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start))));
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
@@ -166,7 +168,7 @@ void ReadRow(const internal::TextLine& line, const FlightTable& table, TableRows
       rows->data[k].push_back(number);
       continue;
     }
-    const std::string_view cell = TrimSpaces(raw);
+    const std::string_view cell = Unquoted(TrimSpaces(raw));
     const std::optional<double> value = internal::ParseNumber(cell);
     if (!value) {
       throw Error(Located(table.source, line.number, CellColumn(line.text, k),

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -193,6 +194,12 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "IMU appears yawed") && Contains(r.err, "yawed.csv")) << r.err;
 
+  // A dead rotor (its column all zeros), even with --allow-partial.
+  const std::string dead = EditedLog("dead.csv", [](std::vector<double>* row) { (*row)[9] = 0.0; });
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", dead, "--allow-partial", "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check rotor_signal") && Contains(r.err, "rotor_3 reads 0")) << r.err;
+
   // UNIX-epoch time stamps (2.4e-7 s resolution), and a 50 Hz log at the default 10 Hz cut-off.
   const std::string epoch = EditedLog("epoch.csv", [](std::vector<double>* row) { (*row)[0] += 1.7e9; });
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", epoch, "--quiet"});
@@ -332,6 +339,33 @@ TEST_F(CliRobustnessTest, BatchOutputStaysLineCompleteAndResumesByOptions) {
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(Contains(r.err, "another rotorid batch")) << r.err;
   EXPECT_EQ(Lines(out).size(), 5u);
+}
+
+// 10. A spreadsheet's CSV: a byte-order mark and quoted cells are read as they are meant; a header
+// separated by ';' names the column map's delimiter instead of "missing required column 't'".
+TEST_F(CliRobustnessTest, SpreadsheetCsvIsReadOrNamesItsSeparator) {
+  std::istringstream in(Slurp(Log()));
+  std::string quoted = "\xEF\xBB\xBF", semicolons;
+  for (std::string line; std::getline(in, line);) {
+    std::string q = line, c = line;
+    if (!line.empty() && line[0] != '#') {
+      q = "\"" + line + "\"";
+      for (size_t k = 0; (k = q.find(',', k)) != std::string::npos; k += 3) q.replace(k, 1, "\",\"");
+      std::replace(c.begin(), c.end(), ',', ';');
+    }
+    quoted += q + "\n";
+    semicolons += c + "\n";
+  }
+  const std::string json = Dir() + "/quoted.json", reference = Dir() + "/reference.json";
+  auto r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("quoted.csv", quoted), "--json", json, "-q"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Log(), "--json", reference, "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(Slurp(json))["linear"]["parameters"],
+            nlohmann::json::parse(Slurp(reference))["linear"]["parameters"]);
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("semicolons.csv", semicolons), "-q"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Contains(r.err, "semicolons.csv") && Contains(r.err, "delimiter: ';'")) << r.err;
 }
 
 // 10. A configuration name that YAML would read otherwise is quoted in the written vehicle file.
