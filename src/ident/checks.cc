@@ -1,6 +1,7 @@
 #include "rotorid/ident/checks.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include "rotorid/core/units.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/model/rotation.h"
 
 namespace rotorid {
 
@@ -244,6 +246,38 @@ Check RotorSignalCheck(const FlightMetrics& m, const std::string& source) {
   return {"rotor_signal", CheckStatus::kOk, source + ": every rotor column varies with the others"};
 }
 
+// The motion-capture attitude against the gyro: the body rotation between poses 20 ms apart over
+// their interval, against the mean gyro there. Euler angles in degrees read 57x fast; a quaternion
+// in the wrong order or another Euler convention turns the rates (rotor drag then fits to 0).
+Check AttitudeCheck(const FlightLog& log) {
+  const std::string& source = log.source;
+  const Eigen::Index n = log.num_samples();
+  const double span_s = n > 1 ? log.t_s[n - 1] - log.t_s[0] : 0.0;
+  const auto step =
+      static_cast<Eigen::Index>(std::max(1.0, std::round(0.02 / (span_s / std::max<Eigen::Index>(n - 1, 1)))));
+  double mocap_sq = 0.0, gyro_sq = 0.0, dot = 0.0;
+  for (Eigen::Index i = 0; i + step < n; i += step) {
+    const Eigen::Matrix3d a = BryantToRotation(log.mocap->bryant_rad.row(i).transpose());
+    const Eigen::Matrix3d b = BryantToRotation(log.mocap->bryant_rad.row(i + step).transpose());
+    const Eigen::AngleAxisd turn(a.transpose() * b);
+    const Eigen::Vector3d rate = turn.angle() * turn.axis() / (log.t_s[i + step] - log.t_s[i]);
+    const Eigen::Vector3d gyro = log.gyro_radps.middleRows(i, step + 1).colwise().mean().transpose();
+    mocap_sq += rate.squaredNorm(), gyro_sq += gyro.squaredNorm(), dot += rate.dot(gyro);
+  }
+  if (!(mocap_sq > 0.0 && gyro_sq > 0.0)) return {"attitude", CheckStatus::kOk, source + ": no rotation to compare"};
+  const double ratio = std::sqrt(mocap_sq / gyro_sq), correlation = dot / std::sqrt(mocap_sq * gyro_sq);
+  const std::string measured = "the attitude turns " + ShortNumber(ratio) +
+                               " times as fast as the gyro says, correlation " + ShortNumber(correlation);
+  if (ratio >= 0.5 && ratio <= 2.0 && correlation >= 0.5)
+    return {"attitude", CheckStatus::kOk, source + ": " + measured};
+  std::string cause =
+      "the motion-capture attitude and the gyro disagree: check the quaternion order (qw, qx, qy, qz), "
+      "the Euler convention (R = Rz(yaw) Ry(pitch) Rx(roll)) and the frames";
+  if (ratio > 0.5 * kRadToDeg && ratio < 2.0 * kRadToDeg)
+    cause = "the attitude angles appear to be in degrees: give roll, pitch, yaw in rad (a column map: euler unit deg)";
+  return {"attitude", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
+}
+
 // Airborne, the vertical specific force follows the thrust; on the ground it stays at g.
 Check AirborneCheck(const FlightMetrics& m, const std::string& source) {
   const std::string measured = "correlation of sum Omega^2 with acc_z " + ShortNumber(m.thrust_force_correlation) +
@@ -422,6 +456,7 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     checks.push_back(acc);
     checks.push_back(motion);
     if (motion.status != CheckStatus::kError) checks.push_back(RotorSignalCheck(m, source));
+    if (raw[k].log.mocap && motion.status != CheckStatus::kError) checks.push_back(AttitudeCheck(raw[k].log));
     // The checks below read the rotor data against the IMU: only once the IMU and motion are sane.
     if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError) continue;
     const Check airborne = AirborneCheck(m, source);
@@ -439,7 +474,7 @@ std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::
   if (raw.size() != processed.size()) throw Error("CheckTimeBase: raw and processed flights differ in number");
   // fs / cut-off below these: an error (-11 % on sim A), a warning (-5 %).
   constexpr double kRateRatioError = 8.0, kRateRatioWarning = 12.0;
-  // Time-stamp resolution over the sample interval above this: an error (1.7e9 s at 200 Hz: 4.8e-5).
+  // Time-stamp resolution over the sample interval above this: a warning (1.7e9 s at 200 Hz: 4.8e-5).
   constexpr double kResolutionError = 1e-5;
   std::vector<Check> checks;
   for (size_t k = 0; k < raw.size(); ++k) {
@@ -461,7 +496,8 @@ std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::
     const std::string stamps = "time stamps up to " + ShortNumber(largest) + " s resolve " + ShortNumber(resolution) +
                                " s, " + ShortNumber(resolution / dt) + " of the sample interval";
     if (resolution / dt > kResolutionError)
-      checks.push_back({"time_base", CheckStatus::kError,
+      // A warning: the bias is a few % (NanoBench's UNIX-epoch CSVs at 100 Hz read 3.9e-5), not a wrong unit.
+      checks.push_back({"time_base", CheckStatus::kWarning,
                         source + ": the " + stamps +
                             " (a UNIX epoch?), which biases kd and I_zz by a few %: subtract the first time stamp "
                             "(t - t[0]) before identifying"});

@@ -71,9 +71,10 @@ class CliRobustnessTest : public ::testing::Test {
       }
     });
   }
-  // The log with each data row (t, gyro, acc, rotors) changed by `edit`.
-  static std::string EditedLog(const std::string& name, const std::function<void(std::vector<double>*)>& edit) {
-    std::istringstream in(Slurp(Log()));
+  // The log (or `source`) with each data row (t, gyro, acc, rotors, ...) changed by `edit`.
+  static std::string EditedLog(const std::string& name, const std::function<void(std::vector<double>*)>& edit,
+                               const std::string& source = Log()) {
+    std::istringstream in(Slurp(source));
     std::ostringstream out;
     out.precision(17);
     bool header_seen = false;
@@ -194,6 +195,20 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "IMU appears yawed") && Contains(r.err, "yawed.csv")) << r.err;
 
+  // Motion-capture Euler angles in degrees.
+  const std::string mocap = Dir() + "/mocap.csv";
+  r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--mocap", "--out", mocap, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string degrees = EditedLog(
+      "degrees.csv",
+      [](std::vector<double>* row) {
+        for (size_t k = 14; k < 17; ++k) (*row)[k] *= 180.0 / M_PI;
+      },
+      mocap);
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", degrees, "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check attitude") && Contains(r.err, "in degrees")) << r.err;
+
   // A dead rotor (its column all zeros), even with --allow-partial.
   const std::string dead = EditedLog("dead.csv", [](std::vector<double>* row) { (*row)[9] = 0.0; });
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", dead, "--allow-partial", "--quiet"});
@@ -202,9 +217,9 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
 
   // UNIX-epoch time stamps (2.4e-7 s resolution), and a 50 Hz log at the default 10 Hz cut-off.
   const std::string epoch = EditedLog("epoch.csv", [](std::vector<double>* row) { (*row)[0] += 1.7e9; });
-  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", epoch, "--quiet"});
-  EXPECT_EQ(r.exit_code, 3) << r.err;
-  EXPECT_TRUE(Contains(r.err, "check time_base") && Contains(r.err, "epoch.csv")) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", epoch});
+  EXPECT_EQ(r.exit_code, 0) << r.err;  // a warning: a bias of a few %, which real epoch logs (NanoBench) have
+  EXPECT_TRUE(Contains(r.err, "check time_base: warning") && Contains(r.err, "epoch.csv")) << r.err;
   const std::string slow = Dir() + "/slow.csv";
   r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--rate", "50", "--out", slow, "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << r.err;

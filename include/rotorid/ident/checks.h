@@ -72,7 +72,7 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
 // The time base of each flight: a sample rate too low for the low-pass cut-off `cutoff_hz` (the
 // filtered derivatives then bias kd and I_zz: sim A at 50 Hz with a 10 Hz cut-off -11 %, at 100 Hz
 // -5 %), and time stamps so large that a double no longer resolves them (a UNIX epoch: 2.4e-7 s at
-// 1.7e9 s, kd and I_zz -2.6 % at 200 Hz).
+// 1.7e9 s, kd and I_zz -2.6 % at 200 Hz; a warning).
 std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
                                  double cutoff_hz);
 
