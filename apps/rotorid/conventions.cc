@@ -20,6 +20,10 @@ namespace fs = std::filesystem;
 // The options naming a file the command writes, and the folder --report writes into.
 constexpr const char* kOutputFileOptions[] = {"--json", "--out", "--truth", "--vehicle-out"};
 constexpr const char* kOutputFolderOption = "--report";
+// The options naming a file the command reads (--config is the root's). Only these: a value such
+// as `--preset A` is no input even when a file A exists.
+constexpr const char* kInputFileOptions[] = {"--vehicle", "--log",        "--validate-vehicle", "--validate-log",
+                                             "--params",  "--column-map", "--manifest"};
 constexpr int kMaxThreads = 256;
 
 std::string CheckOutputFile(const std::string& path) {
@@ -49,13 +53,20 @@ bool IsOutputOption(const std::string& name) {
   return name == kOutputFolderOption;
 }
 
-// Every (option, value) of `app` that names a file, with the --config file of its parents.
+bool IsInputOption(const std::string& name) {
+  for (const char* input : kInputFileOptions)
+    if (name == input) return true;
+  return false;
+}
+
+// Every (option, value) of `app` that names an output (or an input file, with the --config file of
+// its parents).
 std::vector<std::pair<std::string, std::string>> GivenPaths(const CLI::App& app, bool outputs) {
   std::vector<std::pair<std::string, std::string>> paths;
   for (const CLI::Option* option : app.get_options()) {
-    if (option->count() == 0 || option->get_type_size() == 0) continue;  // not given, or a flag
+    if (option->count() == 0) continue;
     const std::string name = option->get_name();
-    if (IsOutputOption(name) != outputs) continue;
+    if (!(outputs ? IsOutputOption(name) : IsInputOption(name))) continue;
     for (const std::string& value : option->results()) paths.emplace_back(name, value);
   }
   if (!outputs)

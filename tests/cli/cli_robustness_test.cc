@@ -148,6 +148,15 @@ TEST_F(CliRobustnessTest, OutputsNamingAnInputAreRefusedBeforeAnyWork) {
   EXPECT_EQ(Slurp(config), config_bytes);
   EXPECT_TRUE(std::filesystem::is_symlink(symlink));
 
+  // A value that is no input may name an existing file: `--preset A --out A`, run twice in one folder.
+  const std::filesystem::path cwd = std::filesystem::current_path();
+  std::filesystem::current_path(Dir());
+  for (int run = 0; run < 2; ++run) {
+    const auto again = RunRotorid({"simulate", "--preset", "A", "--seconds", "2", "--out", "A", "--quiet"});
+    EXPECT_EQ(again.exit_code, 0) << again.err;
+  }
+  std::filesystem::current_path(cwd);
+
   // batch: an entry's log as --out.
   const std::string entry_manifest = Write("entry_manifest.yaml", "logs:\n  - {vehicle: copy.yaml, log: copy.csv}\n");
   const auto r = RunRotorid({"batch", "--manifest", entry_manifest, "--out", log_copy});
