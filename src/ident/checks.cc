@@ -208,6 +208,22 @@ Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, cons
   return {"accelerometer_units", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
 }
 
+// A multirotor's typical turn rate: real flights read a median |gyro| of 0.2-5 rad/s (Crazyflie,
+// Betaflight, INDIflight logs); a gyro in deg/s read as rad/s reads 57x that, and the identification
+// then fails naming roll and pitch excitation, or the segmentation keeps a sliver of the log.
+Check GyroRateCheck(const FlightMetrics& m, const std::string& source) {
+  constexpr double kHighRadps = 12.0;  // 690 deg/s as the median
+  const std::string measured = "median |gyro| " + ShortNumber(m.gyro_median) + " rad/s";
+  if (m.gyro_median <= kHighRadps) return {"gyro_rate", CheckStatus::kOk, source + ": " + measured};
+  const bool degrees = m.gyro_median * kDegToRad <= kHighRadps;
+  return {"gyro_rate", CheckStatus::kError,
+          source + ": " +
+              (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
+                             ShortNumber(kDegToRad) + "; a column map: unit deg/s)"
+                       : "the gyro columns turn faster than any multirotor: check their units (rad/s)") +
+              " (" + measured + ")"};
+}
+
 Check MotionCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
   const std::string measured = "RMS angular velocity " + ShortNumber(m.angular_velocity_rms) +
                                " rad/s, thrust variation " + ShortNumber(m.thrust_variation_pct) + " %";
@@ -455,10 +471,14 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     const Check acc = AccelerometerCheck(m, source, thresholds), motion = MotionCheck(m, source, thresholds);
     checks.push_back(acc);
     checks.push_back(motion);
+    const Check gyro_rate = GyroRateCheck(m, source);
+    checks.push_back(gyro_rate);
     if (motion.status != CheckStatus::kError) checks.push_back(RotorSignalCheck(m, source));
     if (raw[k].log.mocap && motion.status != CheckStatus::kError) checks.push_back(AttitudeCheck(raw[k].log));
     // The checks below read the rotor data against the IMU: only once the IMU and motion are sane.
-    if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError) continue;
+    if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError ||
+        gyro_rate.status == CheckStatus::kError)
+      continue;
     const Check airborne = AirborneCheck(m, source);
     checks.push_back(airborne);
     bool plausible_kt = false;
