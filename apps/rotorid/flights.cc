@@ -157,7 +157,10 @@ LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const s
     const Vehicle vehicle = ReadVehicleYaml(vehicle_paths[i]);
     const std::optional<TimeWindow> window =
         windows.empty() ? std::nullopt : std::optional<TimeWindow>(ParseTimeWindow(windows[i]));
-    SelectedFlight selected = SelectFlight(LoadFlightLog(log_paths[i], vehicle, source), log_paths[i], window, mode);
+    FlightLog log = LoadFlightLog(log_paths[i], vehicle, source);
+    // Before the segmentation, which would leave a deg/s gyro's log out as "gyro limit".
+    if (const Check rate = CheckGyroRate(log); rate.status == CheckStatus::kError) throw Error(rate.message);
+    SelectedFlight selected = SelectFlight(std::move(log), log_paths[i], window, mode);
     if (!options.quiet) std::cout << selected.summary.ConsoleLine() << "\n";
     for (FlightLog& segment : selected.segments)
       loaded.flights.push_back({vehicle, std::move(segment), weights.empty() ? 1.0 : weights[i], static_cast<int>(i)});

@@ -208,22 +208,6 @@ Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, cons
   return {"accelerometer_units", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
 }
 
-// A multirotor's typical turn rate: real flights read a median |gyro| of 0.2-5 rad/s (Crazyflie,
-// Betaflight, INDIflight logs); a gyro in deg/s read as rad/s reads 57x that, and the identification
-// then fails naming roll and pitch excitation, or the segmentation keeps a sliver of the log.
-Check GyroRateCheck(const FlightMetrics& m, const std::string& source) {
-  constexpr double kHighRadps = 12.0;  // 690 deg/s as the median
-  const std::string measured = "median |gyro| " + ShortNumber(m.gyro_median) + " rad/s";
-  if (m.gyro_median <= kHighRadps) return {"gyro_rate", CheckStatus::kOk, source + ": " + measured};
-  const bool degrees = m.gyro_median * kDegToRad <= kHighRadps;
-  return {"gyro_rate", CheckStatus::kError,
-          source + ": " +
-              (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
-                             ShortNumber(kDegToRad) + "; a column map: unit deg/s)"
-                       : "the gyro columns turn faster than any multirotor: check their units (rad/s)") +
-              " (" + measured + ")"};
-}
-
 Check MotionCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
   const std::string measured = "RMS angular velocity " + ShortNumber(m.angular_velocity_rms) +
                                " rad/s, thrust variation " + ShortNumber(m.thrust_variation_pct) + " %";
@@ -471,7 +455,7 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     const Check acc = AccelerometerCheck(m, source, thresholds), motion = MotionCheck(m, source, thresholds);
     checks.push_back(acc);
     checks.push_back(motion);
-    const Check gyro_rate = GyroRateCheck(m, source);
+    const Check gyro_rate = CheckGyroRate(raw[k].log);
     checks.push_back(gyro_rate);
     if (motion.status != CheckStatus::kError) checks.push_back(RotorSignalCheck(m, source));
     if (raw[k].log.mocap && motion.status != CheckStatus::kError) checks.push_back(AttitudeCheck(raw[k].log));
@@ -487,6 +471,22 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     for (Check& c : RotorChecks(m, raw[k], plausible_kt, thresholds)) checks.push_back(std::move(c));
   }
   return checks;
+}
+
+Check CheckGyroRate(const FlightLog& log) {
+  constexpr double kHighRadps = 12.0;  // 690 deg/s as the median
+  std::vector<double> rates(static_cast<size_t>(log.num_samples()));
+  for (Eigen::Index i = 0; i < log.num_samples(); ++i) rates[static_cast<size_t>(i)] = log.gyro_radps.row(i).norm();
+  const double median = Median(rates);
+  const std::string measured = "median |gyro| " + ShortNumber(median) + " rad/s";
+  if (median <= kHighRadps) return {"gyro_rate", CheckStatus::kOk, log.source + ": " + measured};
+  const bool degrees = median * kDegToRad <= kHighRadps;
+  return {"gyro_rate", CheckStatus::kError,
+          log.source + ": " +
+              (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
+                             ShortNumber(kDegToRad) + "; a column map: unit deg/s)"
+                       : "the gyro columns turn faster than any multirotor: check their units (rad/s)") +
+              " (" + measured + ")"};
 }
 
 std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,

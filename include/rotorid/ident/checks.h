@@ -69,6 +69,12 @@ struct InputCheckThresholds {
 std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
                                 const InputCheckThresholds& thresholds = {});
 
+// A multirotor's typical turn rate: real flights read a median |gyro| of 0.2-5 rad/s (Crazyflie,
+// Betaflight, INDIflight logs); a gyro in deg/s read as rad/s reads 57x that (error above 12 rad/s,
+// naming deg/s). Also run on the whole log before segmentation, which would otherwise leave most of
+// such a log out as "gyro limit" and the identification blame the excitation.
+Check CheckGyroRate(const FlightLog& log);
+
 // The time base of each flight: a sample rate too low for the low-pass cut-off `cutoff_hz` (the
 // filtered derivatives then bias kd and I_zz: sim A at 50 Hz with a 10 Hz cut-off -11 %, at 100 Hz
 // -5 %), and time stamps so large that a double no longer resolves them (a UNIX epoch: 2.4e-7 s at
