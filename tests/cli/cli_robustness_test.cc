@@ -226,6 +226,14 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check attitude") && Contains(r.err, "in degrees")) << r.err;
 
+  // An accelerometer that saturates at 11 m/s^2.
+  const std::string clipped = EditedLog("clipped.csv", [](std::vector<double>* row) {
+    for (size_t k = 4; k < 7; ++k) (*row)[k] = std::clamp((*row)[k], -11.0, 11.0);
+  });
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", clipped, "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check saturation") && Contains(r.err, "acc_z sits at 11")) << r.err;
+
   // A dead rotor (its column all zeros), even with --allow-partial.
   const std::string dead = EditedLog("dead.csv", [](std::vector<double>* row) { (*row)[9] = 0.0; });
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", dead, "--allow-partial", "--quiet"});
