@@ -406,6 +406,13 @@ TEST_F(CliRobustnessTest, SpreadsheetCsvIsReadOrNamesItsSeparator) {
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("semicolons.csv", semicolons), "-q"});
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(Contains(r.err, "semicolons.csv") && Contains(r.err, "delimiter: ';'")) << r.err;
+  // A cell of 100 kB quoted in the error: the message stays one line of at most about 1000 characters.
+  const std::string header = "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,rotor_1,rotor_2,rotor_3,rotor_4\n";
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log",
+                  Write("long_cell.csv", header + std::string(100000, 'x') + ",0,0,0,0,0,9.8,1,1,1,1\n"), "-q"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Contains(r.err, "long_cell.csv") && Contains(r.err, "characters left out")) << r.err;
+  EXPECT_LT(r.err.size(), 1200u);
 }
 
 // 10. A configuration name that YAML would read otherwise is quoted in the written vehicle file.
