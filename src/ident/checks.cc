@@ -278,6 +278,32 @@ Check RotorSignalCheck(const FlightMetrics& m, const std::string& source) {
   return {"rotor_signal", CheckStatus::kOk, source + ": every rotor column varies with the others"};
 }
 
+// Motion capture follows a body that cannot teleport: a step of the position far beyond the typical
+// one between samples is two flights joined on one time base (or a tracking glitch), across which the
+// differentiated velocity and acceleration are invented.
+Check StateJumpCheck(const FlightLog& log) {
+  constexpr double kJumpM = 0.1, kTypicalSteps = 50.0;
+  const Eigen::MatrixX3d& p = log.mocap->position_w_m;
+  if (p.rows() < 3) return {"state_jump", CheckStatus::kOk, log.source + ": too few poses"};
+  std::vector<double> steps(static_cast<size_t>(p.rows() - 1));
+  Eigen::Index at = 0;
+  for (Eigen::Index i = 1; i < p.rows(); ++i) {
+    steps[static_cast<size_t>(i - 1)] = (p.row(i) - p.row(i - 1)).norm();
+    if (steps[static_cast<size_t>(i - 1)] > steps[static_cast<size_t>(at)]) at = i - 1;
+  }
+  const double largest = steps[static_cast<size_t>(at)], typical = Median(steps);
+  const std::string measured =
+      "largest position step " + ShortNumber(largest) + " m, typical " + ShortNumber(typical) + " m";
+  if (largest <= kJumpM || largest <= kTypicalSteps * typical)
+    return {"state_jump", CheckStatus::kOk, log.source + ": " + measured};
+  return {"state_jump", CheckStatus::kError,
+          log.source + ": the position jumps by " + ShortNumber(largest) +
+              " m between t = " + FormatValue("%.3f", log.t_s[at]) + " and " + FormatValue("%.3f", log.t_s[at + 1]) +
+              " s: two flights joined on one time base, or a tracking glitch; give each flight its own log, or "
+              "--window around the jump (" +
+              measured + ")"};
+}
+
 // The motion-capture attitude against the gyro: the body rotation between poses 20 ms apart over
 // their interval, against the mean gyro there. Euler angles in degrees read 57x fast; a quaternion
 // in the wrong order or another Euler convention turns the rates (rotor drag then fits to 0).
@@ -491,7 +517,10 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     checks.push_back(gyro_rate);
     checks.push_back(SaturationCheck(raw[k].log));
     if (motion.status != CheckStatus::kError) checks.push_back(RotorSignalCheck(m, source));
-    if (raw[k].log.mocap && motion.status != CheckStatus::kError) checks.push_back(AttitudeCheck(raw[k].log));
+    if (raw[k].log.mocap && motion.status != CheckStatus::kError) {
+      checks.push_back(AttitudeCheck(raw[k].log));
+      checks.push_back(StateJumpCheck(raw[k].log));
+    }
     // The checks below read the rotor data against the IMU: only once the IMU and motion are sane.
     if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError ||
         gyro_rate.status == CheckStatus::kError)

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -225,6 +226,26 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", degrees, "--quiet"});
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check attitude") && Contains(r.err, "in degrees")) << r.err;
+
+  // Two motion-capture flights joined on one time base: the position jumps.
+  const std::string second = Dir() + "/mocap2.csv";
+  r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--seed", "2", "--mocap", "--out", second, "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string joined = Slurp(mocap);
+  const double first_end = std::stod(joined.substr(joined.rfind('\n', joined.size() - 2) + 1));
+  std::istringstream rest(Slurp(second));
+  int sample = 0;
+  for (std::string line; std::getline(rest, line);) {
+    if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0])) || sample++ < 400) continue;
+    const size_t comma = line.find(',');
+    std::ostringstream t;
+    t.precision(17);
+    t << first_end + 0.005 * (sample - 400);
+    joined += t.str() + line.substr(comma) + "\n";
+  }
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("joined.csv", joined), "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check state_jump") && Contains(r.err, "joined.csv: the position jumps")) << r.err;
 
   // An accelerometer that saturates at 11 m/s^2.
   const std::string clipped = EditedLog("clipped.csv", [](std::vector<double>* row) {
