@@ -83,8 +83,8 @@ std::string Quoted(const std::pair<std::string, std::string>& option) {
 }  // namespace
 
 bool SameFile(const std::string& a, const std::string& b) {
-  struct stat sa {
-  }, sb{};
+  struct stat sa {};
+  struct stat sb {};
   if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0)
     return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
   std::error_code ec_a, ec_b;
@@ -96,13 +96,10 @@ void CheckOutputsAgainstInputs(const CLI::App& app) {
   const auto outputs = GivenPaths(app, /*outputs=*/true);
   const auto inputs = GivenPaths(app, /*outputs=*/false);
   for (size_t i = 0; i < outputs.size(); ++i) {
-    for (const auto& input : inputs) {
-      struct stat info {};
-      // A value that names no existing file (a window, a number) cannot be overwritten.
-      if (::stat(input.second.c_str(), &info) == 0 && SameFile(outputs[i].second, input.second))
+    for (const auto& input : inputs)
+      if (SameFile(outputs[i].second, input.second))
         throw UsageError(Quoted(outputs[i]) + " is the input " + Quoted(input) +
                          " (the same file): writing it would destroy the input; give another output path");
-    }
     for (size_t j = i + 1; j < outputs.size(); ++j)
       if (SameFile(outputs[i].second, outputs[j].second))
         throw UsageError(Quoted(outputs[i]) + " and " + Quoted(outputs[j]) +
