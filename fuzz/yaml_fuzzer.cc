@@ -1,6 +1,8 @@
 // libFuzzer target for the YAML readers: vehicle files, column maps, batch manifests and the
 // loader --config goes through. Arbitrary bytes must either parse or throw rotorid::Error, never
-// crash, hang (alias bombs, deep nesting) or trip the sanitizers.
+// crash, hang (alias bombs, deep nesting) or trip the sanitizers. Found so far: yaml-cpp 0.7's
+// LoadAll never returning on ",e," and a manifest key that is a map (a YAML::BadConversion, not a
+// rotorid::Error).
 //
 //   ./fuzz/yaml_fuzzer -runs=1000000 -max_len=4096 corpus_dir
 

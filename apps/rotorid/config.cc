@@ -49,6 +49,7 @@ class YamlConfig : public CLI::Config {
     std::vector<CLI::ConfigItem> items;
     for (const auto& entry : root) {
       CLI::ConfigItem item;
+      if (!entry.first.IsScalar()) throw CLI::ConfigError(source + ": the keys are option names");
       item.name = entry.first.as<std::string>();
       while (!item.name.empty() && item.name[0] == '-') item.name.erase(0, 1);
       const YAML::Node& value = entry.second;

@@ -56,11 +56,11 @@ BatchEntry ReadEntry(const std::string& source, const YAML::Node& node, const st
       } else {
         values.push_back(Scalar(source, option.second, "an option's value"));
       }
-      entry.options.emplace_back(option.first.as<std::string>(), std::move(values));
+      entry.options.emplace_back(Scalar(source, option.first, "an option's name"), std::move(values));
     }
   }
   for (const auto& field : node) {
-    const std::string key = field.first.as<std::string>();
+    const std::string key = Scalar(source, field.first, "a key");
     if (key != "vehicle" && key != "log" && key != "window" && key != "options")
       internal::FailAt(source, field.first, "unknown key '" + key + "' (vehicle, log, window, options)");
   }
