@@ -4,12 +4,15 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -98,6 +101,7 @@ nlohmann::json RunEntry(const BatchOptions& options, const BatchEntry& entry, co
       {"log", entry.log},
       {"vehicle", entry.vehicle},
       {"window", entry.window ? nlohmann::json{entry.window->start_s, entry.window->end_s} : nlohmann::json()},
+      {"options", entry.OptionsJson()},
       {"status", exit_code == 0 ? "ok" : "failed"},
       {"exit_code", exit_code}};
   if (exit_code != 0) line["error"] = FailureReason(err_path, exit_code);
@@ -108,61 +112,136 @@ nlohmann::json RunEntry(const BatchOptions& options, const BatchEntry& entry, co
   return line;
 }
 
-// Appends one line with a single write, so that lines of parallel entries never interleave.
+// The output file, locked against a second batch on it, appended one whole line at a time: a line
+// of parallel entries never interleaves with another, and a line the disk could not take is cut
+// off again, so that a resumed run finds only complete lines.
 class LineWriter {
  public:
-  explicit LineWriter(const std::string& path) : fd_(::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644)) {
-    if (fd_ < 0) throw Error(path + ": cannot open for appending: " + std::strerror(errno));
-  }
+  explicit LineWriter(const std::string& path) : path_(path), fd_(Open(path)) {}
   ~LineWriter() { ::close(fd_); }
   LineWriter(const LineWriter&) = delete;
   LineWriter& operator=(const LineWriter&) = delete;
+
+  // Replaces the content by `text` (the complete lines of an earlier run), still under the lock.
+  void Rewrite(const std::string& text) {
+    if (::ftruncate(fd_, 0) != 0 || !WriteAll(text)) throw Error(path_ + ": cannot rewrite: " + std::strerror(errno));
+  }
   void Write(const nlohmann::json& line) {
     const std::string text = line.dump() + "\n";
     std::lock_guard<std::mutex> lock(mutex_);
-    if (::write(fd_, text.data(), text.size()) != static_cast<ssize_t>(text.size()))
-      throw Error("cannot append to the batch output: " + std::string(std::strerror(errno)));
+    struct stat before {};
+    ::fstat(fd_, &before);
+    if (!WriteAll(text)) {
+      const std::string reason = std::strerror(errno);
+      // The partial line cut off again; should that fail too, the next run drops it (ReadBatchOutput).
+      (void)!::ftruncate(fd_, before.st_size);
+      throw Error(path_ + ": cannot append a line (" + reason + "); the lines before it are complete: run again to " +
+                  "resume");
+    }
   }
 
  private:
-  int fd_;
+  static int Open(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd < 0) throw Error(path + ": cannot open for appending: " + std::strerror(errno));
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd);
+      throw Error(path + ": another rotorid batch is writing to it; give each run its own --out");
+    }
+    return fd;
+  }
+  bool WriteAll(const std::string& text) {
+    for (size_t done = 0; done < text.size();) {
+      const ssize_t n = ::write(fd_, text.data() + done, text.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return false;
+      done += static_cast<size_t>(n);
+    }
+    return true;
+  }
+  const std::string path_;
+  const int fd_;
   std::mutex mutex_;
 };
 
-int RunBatch(const BatchOptions& options) {
-  const BatchShard shard = ParseBatchShard(options.shard);
-  if (options.jobs < 1) throw UsageError("--jobs must be at least 1");
-  MarkOptionsValidated();
-  const std::vector<BatchEntry> entries = ReadBatchManifest(options.manifest);
-  const std::set<std::string> done = CompletedBatchEntries(options.out);
-  std::vector<size_t> todo;
-  size_t skipped = 0;
-  for (size_t k : ShardEntries(entries.size(), shard)) {
-    if (done.count(entries[k].Key()))
-      ++skipped;
-    else
-      todo.push_back(k);
+// A scratch folder for the entries' reports, removed however the run ends.
+class ScratchFolder {
+ public:
+  ScratchFolder() {
+    char name[] = "/tmp/rotorid-batch-XXXXXX";
+    if (::mkdtemp(name) == nullptr) throw Error("batch: cannot create a scratch folder in /tmp");
+    path_ = name;
   }
-  char scratch_template[] = "/tmp/rotorid-batch-XXXXXX";
-  if (::mkdtemp(scratch_template) == nullptr) throw Error("batch: cannot create a scratch folder in /tmp");
-  const std::string scratch = scratch_template;
+  ~ScratchFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const std::string& path() const { return path_; }
 
-  LineWriter writer(options.out);
+ private:
+  std::string path_;
+};
+
+// Runs the entries on `jobs` threads; the first error (the output cannot be written) stops the
+// others after their current entry and is thrown here.
+size_t RunEntries(const BatchOptions& options, const std::vector<BatchEntry>& entries, const std::vector<size_t>& todo,
+                  LineWriter* writer) {
+  const ScratchFolder scratch;
   Progress progress("batch", static_cast<int64_t>(todo.size()), options.quiet);
   std::atomic<size_t> next{0}, finished{0}, failed{0};
+  std::mutex error_mutex;
+  std::exception_ptr error;
   const auto worker = [&] {
-    for (size_t i = next++; i < todo.size(); i = next++) {
-      const nlohmann::json line = RunEntry(options, entries[todo[i]], scratch, todo[i]);
-      if (line["status"] != "ok") ++failed;
-      writer.Write(line);
-      progress.Update(static_cast<int64_t>(++finished));
+    try {
+      for (size_t i = next++; i < todo.size(); i = next++) {
+        const nlohmann::json line = RunEntry(options, entries[todo[i]], scratch.path(), todo[i]);
+        if (line["status"] != "ok") ++failed;
+        writer->Write(line);
+        progress.Update(static_cast<int64_t>(++finished));
+      }
+    } catch (...) {
+      next = todo.size();
+      const std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
     }
   };
   std::vector<std::thread> threads;
   for (int j = 0; j < std::min<int>(options.jobs, static_cast<int>(todo.size())); ++j) threads.emplace_back(worker);
   for (std::thread& t : threads) t.join();
   progress.Finish();
-  std::filesystem::remove_all(scratch);
+  if (error) std::rethrow_exception(error);
+  return failed;
+}
+
+int RunBatch(const BatchOptions& options) {
+  const BatchShard shard = ParseBatchShard(options.shard);
+  if (options.jobs < 1) throw UsageError("--jobs must be at least 1");
+  MarkOptionsValidated();
+  const std::vector<BatchEntry> entries = ReadBatchManifest(options.manifest);
+  for (const BatchEntry& entry : entries)
+    for (const std::string& input : {entry.log, entry.vehicle})
+      if (SameFile(options.out, input))
+        throw Error(options.manifest + ": lists --out '" + options.out + "' as an input ('" + input +
+                    "'): the output would destroy it; give another --out");
+  LineWriter writer(options.out);
+  const BatchOutput earlier = ReadBatchOutput(options.out);
+  if (earlier.broken_lines > 0) {
+    writer.Rewrite(earlier.complete_lines);
+    if (!options.quiet)
+      std::cerr << "rotorid: note: " << options.out << ": dropped " << earlier.broken_lines
+                << " incomplete line(s) of an earlier run; their entries run again\n";
+  }
+  std::vector<size_t> todo;
+  size_t skipped = 0;
+  for (size_t k : ShardEntries(entries.size(), shard)) {
+    if (earlier.done.count(entries[k].Key()))
+      ++skipped;
+    else
+      todo.push_back(k);
+  }
+  const size_t failed = RunEntries(options, entries, todo, &writer);
   if (!options.quiet) {
     std::cout << "rotorid batch: " << options.command << " on " << todo.size() << " of " << entries.size()
               << " entries (shard " << shard.index << "/" << shard.count << ", " << skipped

@@ -149,8 +149,17 @@ std::function<std::string(const std::string&)> ParsesWith(Parse parse) {
   };
 }
 
+// A CLI11 check: a number in [low, high] (NaN and infinities refused).
+CLI::Validator Within(double low, double high);
+
 // Output-path and effect-list checks at parse time, and --config, on every command.
 void ApplyConventions(const std::vector<Command>& commands);
+// Once parsed, before any work: no output (--json, --out, --truth, --vehicle-out, --report) is one
+// of the command's input files (the same file, also through a hard link or a symlink) or another
+// output. Throws UsageError naming both options.
+void CheckOutputsAgainstInputs(const CLI::App& app);
+// Whether two paths name the same file (device and inode when both exist, else the same path).
+bool SameFile(const std::string& a, const std::string& b);
 // "run 'rotorid SUB --help' for its options", for the subcommand on the command line.
 std::string UsageHint(const CLI::App& root, int argc, char** argv);
 // Non-empty when argv names no known subcommand: what to tell the user.

@@ -13,6 +13,7 @@
 
 #include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/io/yaml_document.h"
 
 namespace rotorid::cli {
 
@@ -28,17 +29,27 @@ class YamlConfig : public CLI::Config {
   std::string to_config(const CLI::App*, bool, bool, std::string) const override { return {}; }
 
   std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+    // At most the cap, and one byte more to tell that the file is larger (a device, say).
+    std::string text(kMaxYamlFileBytes + 1, '\0');
+    input.read(text.data(), static_cast<std::streamsize>(text.size()));
+    text.resize(static_cast<size_t>(input.gcount()));
+    if (text.size() > kMaxYamlFileBytes)
+      throw CLI::ConfigError("--config: larger than " + std::to_string(kMaxYamlFileBytes >> 20) +
+                             " MB: is it the right file?");
+    const CLI::Option* option = root_->get_config_ptr();
+    const std::string source = option != nullptr && option->count() > 0 ? option->as<std::string>() : "--config";
     YAML::Node root;
     try {
-      root = YAML::Load(input);
-    } catch (const YAML::Exception& e) {
-      throw CLI::ConfigError("--config: not valid YAML: " + std::string(e.what()));
+      root = LoadYaml(text, source);
+    } catch (const Error& e) {
+      throw CLI::ConfigError(e.what());
     }
     if (root.IsNull()) return {};
     if (!root.IsMap()) throw CLI::ConfigError("--config: the file must be a map of option: value");
     std::vector<CLI::ConfigItem> items;
     for (const auto& entry : root) {
       CLI::ConfigItem item;
+      if (!entry.first.IsScalar()) throw CLI::ConfigError(source + ": the keys are option names");
       item.name = entry.first.as<std::string>();
       while (!item.name.empty() && item.name[0] == '-') item.name.erase(0, 1);
       const YAML::Node& value = entry.second;
@@ -108,7 +119,7 @@ nlohmann::json ConfigJson(const CLI::App& app) {
   if (option == nullptr || option->count() == 0) return nullptr;
   const std::string path = option->as<std::string>();
   try {
-    return {{"file", path}, {"options", YamlJson(YAML::LoadFile(path))}};
+    return {{"file", path}, {"options", YamlJson(LoadYamlFile(path))}};
   } catch (const YAML::Exception& e) {
     throw Error(path + ": " + e.what());
   }

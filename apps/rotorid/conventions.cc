@@ -1,9 +1,11 @@
 // The conventions every subcommand follows (docs/cli.md): output paths checked while parsing
 // (before any work), effect lists checked while parsing, --config, and the usage-error message.
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
+#include <utility>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
@@ -15,10 +17,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The options naming a file the command writes, and the folder --report writes into.
+constexpr const char* kOutputFileOptions[] = {"--json", "--out", "--truth", "--vehicle-out"};
+constexpr const char* kOutputFolderOption = "--report";
+// The options naming a file the command reads (--config is the root's). Only these: a value such
+// as `--preset A` is no input even when a file A exists.
+constexpr const char* kInputFileOptions[] = {"--vehicle", "--log",        "--validate-vehicle", "--validate-log",
+                                             "--params",  "--column-map", "--manifest"};
+constexpr int kMaxThreads = 256;
+
 std::string CheckOutputFile(const std::string& path) {
   if (path.empty()) return "an output file name must not be empty";
   std::error_code ec;
   if (fs::is_directory(path, ec)) return "'" + path + "' is a folder, not a file";
+  // Outputs are renamed into place: a device, FIFO or socket would be replaced, after all the work.
+  if (fs::exists(path, ec) && !fs::is_regular_file(path, ec))
+    return "'" + path + "' exists and is not a regular file (a device, FIFO or socket): give the path of a file";
   const fs::path parent = fs::path(path).parent_path();
   const std::string folder = parent.empty() ? "." : parent.string();
   if (!fs::is_directory(folder, ec)) return "folder '" + folder + "' of '" + path + "' does not exist";
@@ -33,14 +47,75 @@ std::string CheckOutputFolder(const std::string& path) {
   return {};
 }
 
+bool IsOutputOption(const std::string& name) {
+  for (const char* output : kOutputFileOptions)
+    if (name == output) return true;
+  return name == kOutputFolderOption;
+}
+
+bool IsInputOption(const std::string& name) {
+  for (const char* input : kInputFileOptions)
+    if (name == input) return true;
+  return false;
+}
+
+// Every (option, value) of `app` that names an output (or an input file, with the --config file of
+// its parents).
+std::vector<std::pair<std::string, std::string>> GivenPaths(const CLI::App& app, bool outputs) {
+  std::vector<std::pair<std::string, std::string>> paths;
+  for (const CLI::Option* option : app.get_options()) {
+    if (option->count() == 0) continue;
+    const std::string name = option->get_name();
+    if (!(outputs ? IsOutputOption(name) : IsInputOption(name))) continue;
+    for (const std::string& value : option->results()) paths.emplace_back(name, value);
+  }
+  if (!outputs)
+    for (const CLI::App* parent = app.get_parent(); parent != nullptr; parent = parent->get_parent())
+      if (const CLI::Option* config = parent->get_config_ptr(); config != nullptr && config->count() > 0)
+        paths.emplace_back(config->get_name(), config->as<std::string>());
+  return paths;
+}
+
+std::string Quoted(const std::pair<std::string, std::string>& option) {
+  return option.first + " '" + option.second + "'";
+}
+
 }  // namespace
+
+bool SameFile(const std::string& a, const std::string& b) {
+  struct stat sa {};
+  struct stat sb {};
+  if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0)
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  std::error_code ec_a, ec_b;
+  const fs::path ca = fs::weakly_canonical(a, ec_a), cb = fs::weakly_canonical(b, ec_b);
+  return !ec_a && !ec_b && ca == cb;
+}
+
+void CheckOutputsAgainstInputs(const CLI::App& app) {
+  const auto outputs = GivenPaths(app, /*outputs=*/true);
+  const auto inputs = GivenPaths(app, /*outputs=*/false);
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    for (const auto& input : inputs)
+      if (SameFile(outputs[i].second, input.second))
+        throw UsageError(Quoted(outputs[i]) + " is the input " + Quoted(input) +
+                         " (the same file): writing it would destroy the input; give another output path");
+    for (size_t j = i + 1; j < outputs.size(); ++j)
+      if (SameFile(outputs[i].second, outputs[j].second))
+        throw UsageError(Quoted(outputs[i]) + " and " + Quoted(outputs[j]) +
+                         " name the same file: one output would replace the other");
+  }
+}
 
 void ApplyConventions(const std::vector<Command>& commands) {
   for (const Command& command : commands) {
-    for (const char* name : {"--json", "--out", "--truth", "--vehicle-out"})
+    for (const char* name : kOutputFileOptions)
       if (CLI::Option* option = command.app->get_option_no_throw(name)) option->check(CheckOutputFile);
-    if (CLI::Option* option = command.app->get_option_no_throw("--report")) option->check(CheckOutputFolder);
+    if (CLI::Option* option = command.app->get_option_no_throw(kOutputFolderOption)) option->check(CheckOutputFolder);
     if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(ParsesWith(ParseEffectList));
+    // Each thread or job takes memory (a refinement's Jacobian, a process): 1e6 exhausted it.
+    for (const char* name : {"--threads", "--jobs"})
+      if (CLI::Option* option = command.app->get_option_no_throw(name)) option->check(Within(1, kMaxThreads));
   }
 }
 

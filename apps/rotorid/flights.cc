@@ -20,6 +20,18 @@ bool options_validated = false;
 
 }  // namespace
 
+CLI::Validator Within(double low, double high) {
+  return CLI::Validator(
+      [low, high](const std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        if (!(value >= low && value <= high))  // NaN fails too
+          return "must lie in [" + ShortNumber(low) + ", " + ShortNumber(high) + "], got " + text;
+        return {};
+      },
+      "in [" + ShortNumber(low) + ", " + ShortNumber(high) + "]");
+}
+
 void MarkOptionsValidated() { options_validated = true; }
 bool OptionsValidated() { return options_validated; }
 
@@ -32,7 +44,8 @@ void AddFlightOptions(CLI::App* app, FlightOptions* options, bool held_out) {
       ->required()
       ->check(CLI::ExistingFile);
   app->add_option("--weight", options->weights,
-                  "weight of each --vehicle/--log pair (default 1; the paper uses 2 for B)");
+                  "weight of each --vehicle/--log pair (default 1; the paper uses 2 for B)")
+      ->check(Within(1e-6, 1e6));
   app->add_option("--window", options->windows,
                   "START,END: seconds of the log's own time base to use, paired in order with --log")
       ->check(ParsesWith(ParseTimeWindow));
@@ -63,14 +76,22 @@ void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* o) {
                   "or paper (the published procedure, for comparison)")
       ->capture_default_str();
   app->add_option("--source", o->source, "imu or mocap")->capture_default_str();
-  app->add_option("--cutoff-hz", obs.filter.cutoff_hz, "low-pass cut-off of every signal (Hz)")->capture_default_str();
-  app->add_option("--filter-order", obs.filter.order, "Butterworth order")->capture_default_str();
-  app->add_option("--row-rate-hz", obs.row_rate_hz, "rate of the IDIM rows (Hz; 0: five times the cut-off)")
+  // Ranges checked while parsing: a value far outside (--edge-trim-s 1e7) crashed the processing.
+  app->add_option("--cutoff-hz", obs.filter.cutoff_hz, "low-pass cut-off of every signal (Hz)")
+      ->check(Within(0.01, 5000.0))
       ->capture_default_str();
-  app->add_option("--edge-trim-s", obs.edge_trim_s, "seconds left out at each end of a flight")->capture_default_str();
+  app->add_option("--filter-order", obs.filter.order, "Butterworth order")->check(Within(1, 12))->capture_default_str();
+  app->add_option("--row-rate-hz", obs.row_rate_hz, "rate of the IDIM rows (Hz; 0: five times the cut-off)")
+      ->check(Within(0.0, 1e5))
+      ->capture_default_str();
+  app->add_option("--edge-trim-s", obs.edge_trim_s, "seconds left out at each end of a flight")
+      ->check(Within(0.0, 600.0))
+      ->capture_default_str();
   app->add_option("--r-sigma", tls.r_sigma, "paper method: essential parameters until max/min %sigma < r_sigma")
+      ->check(Within(1e-6, 1e12))
       ->capture_default_str();
   app->add_option("--max-rel-std", tls.max_rel_std_pct, "noise-aware method: drop parameters whose %sigma exceeds this")
+      ->check(Within(1e-6, 1e12))
       ->capture_default_str();
   app->add_flag("!--all-parameters", tls.select_essential, "keep every parameter (no essential selection)");
   app->add_flag("!--no-component-weighting", tls.weight_by_component, "paper method: no weighting by wrench component");
@@ -136,7 +157,10 @@ LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const s
     const Vehicle vehicle = ReadVehicleYaml(vehicle_paths[i]);
     const std::optional<TimeWindow> window =
         windows.empty() ? std::nullopt : std::optional<TimeWindow>(ParseTimeWindow(windows[i]));
-    SelectedFlight selected = SelectFlight(LoadFlightLog(log_paths[i], vehicle, source), log_paths[i], window, mode);
+    FlightLog log = LoadFlightLog(log_paths[i], vehicle, source);
+    // Before the segmentation, which would leave a deg/s gyro's log out as "gyro limit".
+    if (const Check rate = CheckGyroRate(log); rate.status == CheckStatus::kError) throw Error(rate.message);
+    SelectedFlight selected = SelectFlight(std::move(log), log_paths[i], window, mode);
     if (!options.quiet) std::cout << selected.summary.ConsoleLine() << "\n";
     for (FlightLog& segment : selected.segments)
       loaded.flights.push_back({vehicle, std::move(segment), weights.empty() ? 1.0 : weights[i], static_cast<int>(i)});

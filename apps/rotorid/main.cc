@@ -8,11 +8,12 @@
 #include "commands.h"
 #include "heap.h"
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
 
 namespace {
 
 int UsageFailure(const std::string& message, const std::string& hint) {
-  std::cerr << "rotorid: error: " << message << " (" << hint << ")\n";
+  std::cerr << "rotorid: error: " << rotorid::ShortText(message) << " (" << hint << ")\n";
   return 2;
 }
 
@@ -51,13 +52,16 @@ int main(int argc, char** argv) {
     if (command.app->parsed() && verbose && verbose->count() > 0) FLAGS_minloglevel = google::GLOG_INFO;
   }
   try {
-    for (const Command& command : commands)
-      if (command.app->parsed()) return command.run();
+    for (const Command& command : commands) {
+      if (!command.app->parsed()) continue;
+      CheckOutputsAgainstInputs(*command.app);
+      return command.run();
+    }
   } catch (const UsageError& e) {
     return UsageFailure(e.what(), UsageHint(root, argc, argv));
   } catch (const rotorid::Error& e) {
     if (!OptionsValidated()) return UsageFailure(e.what(), UsageHint(root, argc, argv));
-    std::cerr << "rotorid: error: " << e.what() << "\n";
+    std::cerr << "rotorid: error: " << rotorid::ShortText(e.what()) << "\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "rotorid: internal error: " << e.what() << "\n";

@@ -1,9 +1,11 @@
 #include "rotorid/ident/checks.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 
 #include "rotorid/core/error.h"
@@ -12,6 +14,7 @@
 #include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/flight_source.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/model/rotation.h"
 
 namespace rotorid {
 
@@ -59,6 +62,19 @@ std::string VehicleFile(const Vehicle& vehicle) {
   return vehicle.source.empty() ? "the vehicle file of '" + vehicle.name + "'" : vehicle.source;
 }
 
+// The smallest distance between two rotors in the rotor plane, coaxial pairs left out (0 when every
+// rotor shares one axis): no propeller is wider.
+double RotorSpacing(const Vehicle& vehicle) {
+  double spacing = 0.0;
+  const double coaxial_m = 0.05 * vehicle.MeanArm();
+  for (size_t i = 0; i < vehicle.rotors.size(); ++i)
+    for (size_t j = i + 1; j < vehicle.rotors.size(); ++j) {
+      const double d = (vehicle.rotors[i].position_m - vehicle.rotors[j].position_m).head<2>().norm();
+      if (d > coaxial_m && (spacing == 0.0 || d < spacing)) spacing = d;
+    }
+  return spacing;
+}
+
 // What one flight shows, at its IDIM row samples.
 struct FlightMetrics {
   double gravity = kStandardGravity;
@@ -69,12 +85,19 @@ struct FlightMetrics {
   double thrust_variation_pct = 0.0;
   double thrust_force_correlation = 0.0;  // of sum Omega_i^2 with s_z
   double arm_m = 0.0;                     // mean rotor distance from the z axis
+  double spacing_m = 0.0;                 // smallest distance between two rotors off each other's axis
   bool rotor_is_speed = true;             // a speed (measured, or a command through the vehicle's map)
   bool rotor_is_measured_speed = true;
   // Least-squares angular acceleration per unit Omega_i^2 variation (3 x rotors), with the rotor
   // signal shifted by rotor_lag_s.
   Eigen::MatrixXd moment_pattern;
   double rotor_lag_s = 0.0;
+  // The rotation about z (deg) that best turns the roll/pitch moments the rotor positions predict
+  // (sum_i (y_i, -x_i) Omega_i^2, up to kt / I) into the measured angular acceleration (MeasureMomentYaw).
+  double moment_yaw_deg = 0.0;
+  double moment_yaw_correlation = 0.0;  // of the turned moments with the angular acceleration
+  // Per rotor, mean and standard deviation of Omega_i^2 over the rows.
+  Eigen::VectorXd rotor_square_mean, rotor_square_std;
 };
 
 // The rotor-moment pattern: centred regression of the angular acceleration on each rotor's
@@ -100,6 +123,37 @@ double FitMomentPattern(const ProcessedFlight& f, int lag, Eigen::MatrixXd* patt
   return total > 0.0 ? 1.0 - (y - x * pattern->transpose()).squaredNorm() / total : 0.0;
 }
 
+// The rotation about z that best turns the roll/pitch moments the rotor positions predict into the
+// measured angular acceleration (2-D Procrustes over the samples), at the time shift within 0.1 s
+// that fits best: when the tilt direction circles, a delay of the rotor signal alone turns the
+// moments by 2 pi f delay (PWM commands of eckart34: -28 deg unshifted, 0.3 deg shifted).
+void MeasureMomentYaw(const ProcessedFlight& f, FlightMetrics* m) {
+  if (f.row_samples.empty() || !(f.dt_s > 0.0)) return;
+  const int first = f.row_samples.front(), n = f.row_samples.back() - first + 1, rotors = f.vehicle.num_rotors();
+  Eigen::VectorXd arm_y(rotors), arm_x(rotors);
+  for (int i = 0; i < rotors; ++i)
+    arm_y[i] = f.vehicle.rotors[i].position_m.y(), arm_x[i] = f.vehicle.rotors[i].position_m.x();
+  const Eigen::MatrixXd thrusts = f.rotor.middleRows(first, n).array().square().matrix();
+  Eigen::MatrixX2d moment(n, 2), acceleration = f.angular_acceleration.middleRows(first, n).leftCols(2);
+  moment << thrusts * arm_y, -(thrusts * arm_x);
+  moment.rowwise() -= moment.colwise().mean();
+  acceleration.rowwise() -= acceleration.colwise().mean();
+  const int max_shift = std::min(static_cast<int>(std::lround(0.1 / f.dt_s)), n / 4);
+  for (int shift = -max_shift; shift <= max_shift; ++shift) {
+    const int length = n - std::abs(shift);
+    const auto a = moment.middleRows(std::max(0, -shift), length);
+    const auto b = acceleration.middleRows(std::max(0, shift), length);
+    const double dot = a.col(0).dot(b.col(0)) + a.col(1).dot(b.col(1));
+    const double cross = a.col(0).dot(b.col(1)) - a.col(1).dot(b.col(0));
+    const double norms = std::sqrt(a.squaredNorm() * b.squaredNorm());
+    const double correlation = norms > 0.0 ? std::hypot(dot, cross) / norms : 0.0;
+    if (dot > 0.0 && correlation > m->moment_yaw_correlation) {
+      m->moment_yaw_correlation = correlation;
+      m->moment_yaw_deg = std::atan2(cross, dot) * kRadToDeg;
+    }
+  }
+}
+
 FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f, const InputCheckThresholds& t) {
   FlightMetrics m;
   m.gravity = f.gravity_mps2;
@@ -108,22 +162,30 @@ FlightMetrics Measure(const FlightData& raw, const ProcessedFlight& f, const Inp
   const int rows = f.num_rows_samples();
   std::vector<double> acc(rows), gyro(rows);
   Eigen::VectorXd thrust(rows), force_z(rows);
+  Eigen::MatrixXd squares(rows, f.vehicle.num_rotors());  // Omega_i^2 per row sample
   for (int r = 0; r < rows; ++r) {
     const int i = f.row_samples[r];
     acc[r] = f.specific_force.row(i).norm();
     gyro[r] = f.angular_velocity.row(i).norm();
     m.angular_velocity_rms += gyro[r] * gyro[r];
-    thrust[r] = f.rotor.row(i).squaredNorm();
+    squares.row(r) = f.rotor.row(i).array().square().matrix();
+    thrust[r] = squares.row(r).sum();
     force_z[r] = f.specific_force(i, 2);
   }
   m.acc_median = Median(acc);
   m.gyro_median = Median(gyro);
   m.angular_velocity_rms = std::sqrt(m.angular_velocity_rms / std::max(rows, 1));
   m.thrust_mean = thrust.mean();
+  m.rotor_square_mean = squares.colwise().mean().transpose();
+  m.rotor_square_std = ((squares.rowwise() - squares.colwise().mean()).colwise().squaredNorm() / std::max(rows, 1))
+                           .cwiseSqrt()
+                           .transpose();
   if (m.thrust_mean > 0.0)
     m.thrust_variation_pct = 100.0 * std::sqrt((thrust.array() - m.thrust_mean).square().mean()) / m.thrust_mean;
   m.thrust_force_correlation = Correlation(thrust, force_z);
   m.arm_m = f.vehicle.MeanArm();
+  m.spacing_m = RotorSpacing(f.vehicle);
+  MeasureMomentYaw(f, &m);
   // The lag is chosen by how much of the angular acceleration the rotors explain, which does not
   // depend on the vehicle file, so a swapped order still shows as a swap. Steps of about 5 ms.
   const double max_lag_s = m.rotor_is_measured_speed ? t.max_speed_lag_s : t.max_command_lag_s;
@@ -176,6 +238,38 @@ Check AccelerometerCheck(const FlightMetrics& m, const std::string& source, cons
   return {"accelerometer_units", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
 }
 
+// A sensor at its range limit repeats one value exactly (its extreme) where the motion went further,
+// more often than the values just inside it occur (a quantised log, Betaflight's integer deg/s,
+// repeats its extremes a few times, like its other values): the regression then reads a smaller
+// force or rate than the rotors made (sim A with the accelerometer clipped at 11 m/s^2 on 15 % of
+// its samples: kt and I_xx -1.5 %, exit 0 before).
+Check SaturationCheck(const FlightLog& log) {
+  constexpr double kShare = 0.01;  // of the samples at one extreme, and at least kMinCount
+  constexpr int kMinCount = 5;
+  const Eigen::Index n = log.num_samples();
+  const auto clipped = [&](const Eigen::MatrixX3d& x, const char* prefix) -> std::string {
+    for (int a = 0; a < 3; ++a)
+      for (const double extreme : {x.col(a).maxCoeff(), x.col(a).minCoeff()}) {
+        const auto count = (x.col(a).array() == extreme).count();
+        // The values within 5 % of the axis's span inside the extreme.
+        const double band = 0.05 * (x.col(a).maxCoeff() - x.col(a).minCoeff());
+        const auto inside = ((x.col(a).array() - extreme).abs() <= band && x.col(a).array() != extreme).count();
+        if (extreme != 0.0 && count >= kMinCount && static_cast<double>(count) >= kShare * static_cast<double>(n) &&
+            count > inside)
+          return std::string(prefix) + "xyz"[a] + " sits at " + ShortNumber(extreme) + " on " + std::to_string(count) +
+                 " of " + std::to_string(n) + " samples";
+      }
+    return {};
+  };
+  std::string found = clipped(log.acc_mps2, "acc_");
+  if (found.empty()) found = clipped(log.gyro_radps, "gyro_");
+  if (found.empty()) return {"saturation", CheckStatus::kOk, log.source + ": no sensor axis repeats its extreme"};
+  return {"saturation", CheckStatus::kError,
+          log.source + ": " + found +
+              ": the sensor saturates (its range limit) and the force or rate beyond is lost; use a --window "
+              "without the saturated stretches, or raise the sensor's range"};
+}
+
 Check MotionCheck(const FlightMetrics& m, const std::string& source, const InputCheckThresholds& t) {
   const std::string measured = "RMS angular velocity " + ShortNumber(m.angular_velocity_rms) +
                                " rad/s, thrust variation " + ShortNumber(m.thrust_variation_pct) + " %";
@@ -188,6 +282,88 @@ Check MotionCheck(const FlightMetrics& m, const std::string& source, const Input
                 "): it cannot determine inertia or kt; identify on a flight with roll, pitch, yaw and thrust changes "
                 "(docs/tutorial.md)"};
   return {"motion", CheckStatus::kOk, source + ": " + measured};
+}
+
+// A rotor column that reads (nearly) nothing, or never changes, while the others fly: a dead rotor
+// or an unlogged column, which the regression would absorb silently (rotor 3 of sim A all zeros: kt
+// +31 %, kd and I_zz 0, every other check ok).
+Check RotorSignalCheck(const FlightMetrics& m, const std::string& source) {
+  constexpr double kDeadShare = 0.1, kStuckShare = 0.01;  // of the median rotor's mean, and std
+  const auto median = [](const Eigen::VectorXd& v) {
+    return Median(std::vector<double>(v.data(), v.data() + v.size()));
+  };
+  const double typical_mean = median(m.rotor_square_mean), typical_std = median(m.rotor_square_std);
+  for (Eigen::Index i = 0; i < m.rotor_square_mean.size(); ++i) {
+    const std::string rotor = "rotor_" + std::to_string(i + 1);
+    if (m.rotor_square_mean[i] < kDeadShare * typical_mean)
+      return {"rotor_signal", CheckStatus::kError,
+              source + ": " + rotor + " reads " + ShortNumber(std::sqrt(m.rotor_square_mean[i])) +
+                  " RMS while the median rotor reads " + ShortNumber(std::sqrt(typical_mean)) +
+                  ": a dead rotor or an empty column; give its speeds, or fly a vehicle file without it"};
+    if (m.rotor_square_std[i] < kStuckShare * typical_std)
+      return {
+          "rotor_signal", CheckStatus::kError,
+          source + ": " + rotor + " never changes while the others do: a stuck or constant column; give its speeds"};
+  }
+  return {"rotor_signal", CheckStatus::kOk, source + ": every rotor column varies with the others"};
+}
+
+// Motion capture follows a body that cannot teleport: a step of the position far beyond the typical
+// one between samples is two flights joined on one time base (or a tracking glitch), across which the
+// differentiated velocity and acceleration are invented.
+Check StateJumpCheck(const FlightLog& log) {
+  constexpr double kJumpM = 0.1, kTypicalSteps = 50.0;
+  const Eigen::MatrixX3d& p = log.mocap->position_w_m;
+  if (p.rows() < 3) return {"state_jump", CheckStatus::kOk, log.source + ": too few poses"};
+  std::vector<double> steps(static_cast<size_t>(p.rows() - 1));
+  Eigen::Index at = 0;
+  for (Eigen::Index i = 1; i < p.rows(); ++i) {
+    steps[static_cast<size_t>(i - 1)] = (p.row(i) - p.row(i - 1)).norm();
+    if (steps[static_cast<size_t>(i - 1)] > steps[static_cast<size_t>(at)]) at = i - 1;
+  }
+  const double largest = steps[static_cast<size_t>(at)], typical = Median(steps);
+  const std::string measured =
+      "largest position step " + ShortNumber(largest) + " m, typical " + ShortNumber(typical) + " m";
+  if (largest <= kJumpM || largest <= kTypicalSteps * typical)
+    return {"state_jump", CheckStatus::kOk, log.source + ": " + measured};
+  return {"state_jump", CheckStatus::kError,
+          log.source + ": the position jumps by " + ShortNumber(largest) +
+              " m between t = " + FormatValue("%.3f", log.t_s[at]) + " and " + FormatValue("%.3f", log.t_s[at + 1]) +
+              " s: two flights joined on one time base, or a tracking glitch; give each flight its own log, or "
+              "--window around the jump (" +
+              measured + ")"};
+}
+
+// The motion-capture attitude against the gyro: the body rotation between poses 20 ms apart over
+// their interval, against the mean gyro there. Euler angles in degrees read 57x fast; a quaternion
+// in the wrong order or another Euler convention turns the rates (rotor drag then fits to 0).
+Check AttitudeCheck(const FlightLog& log) {
+  const std::string& source = log.source;
+  const Eigen::Index n = log.num_samples();
+  const double span_s = n > 1 ? log.t_s[n - 1] - log.t_s[0] : 0.0;
+  const auto step =
+      static_cast<Eigen::Index>(std::max(1.0, std::round(0.02 / (span_s / std::max<Eigen::Index>(n - 1, 1)))));
+  double mocap_sq = 0.0, gyro_sq = 0.0, dot = 0.0;
+  for (Eigen::Index i = 0; i + step < n; i += step) {
+    const Eigen::Matrix3d a = BryantToRotation(log.mocap->bryant_rad.row(i).transpose());
+    const Eigen::Matrix3d b = BryantToRotation(log.mocap->bryant_rad.row(i + step).transpose());
+    const Eigen::AngleAxisd turn(a.transpose() * b);
+    const Eigen::Vector3d rate = turn.angle() * turn.axis() / (log.t_s[i + step] - log.t_s[i]);
+    const Eigen::Vector3d gyro = log.gyro_radps.middleRows(i, step + 1).colwise().mean().transpose();
+    mocap_sq += rate.squaredNorm(), gyro_sq += gyro.squaredNorm(), dot += rate.dot(gyro);
+  }
+  if (!(mocap_sq > 0.0 && gyro_sq > 0.0)) return {"attitude", CheckStatus::kOk, source + ": no rotation to compare"};
+  const double ratio = std::sqrt(mocap_sq / gyro_sq), correlation = dot / std::sqrt(mocap_sq * gyro_sq);
+  const std::string measured = "the attitude turns " + ShortNumber(ratio) +
+                               " times as fast as the gyro says, correlation " + ShortNumber(correlation);
+  if (ratio >= 0.5 && ratio <= 2.0 && correlation >= 0.5)
+    return {"attitude", CheckStatus::kOk, source + ": " + measured};
+  std::string cause =
+      "the motion-capture attitude and the gyro disagree: check the quaternion order (qw, qx, qy, qz), "
+      "the Euler convention (R = Rz(yaw) Ry(pitch) Rx(roll)) and the frames";
+  if (ratio > 0.5 * kRadToDeg && ratio < 2.0 * kRadToDeg)
+    cause = "the attitude angles appear to be in degrees: give roll, pitch, yaw in rad (a column map: euler unit deg)";
+  return {"attitude", CheckStatus::kError, source + ": " + cause + " (" + measured + ")"};
 }
 
 // Airborne, the vertical specific force follows the thrust; on the ground it stays at g.
@@ -214,17 +390,28 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   auto coefficient = [&](double mass, double arm, double thrust_mean) {
     return mass * m.gravity / thrust_mean * 4.0 * M_PI * M_PI / (kAirDensityKgpm3 * std::pow(arm, 4));
   };
+  // The same over the rotor spacing (positions scale with the arm).
+  const double spacing_over_arm = m.spacing_m > 0.0 ? m.spacing_m / r : 0.0;
+  auto spacing_coefficient = [&](double mass, double arm, double thrust_mean) {
+    return coefficient(mass, arm, thrust_mean) / std::pow(spacing_over_arm, 4);
+  };
   auto fits = [&](double mass, double arm, double thrust_mean) {
     const double d = density(mass, arm), c = coefficient(mass, arm, thrust_mean);
     return d >= t.density_low_kgpm3 && d <= t.density_high_kgpm3 &&
-           (!m.rotor_is_speed || (c >= t.thrust_coefficient_low && c <= t.thrust_coefficient_high));
+           (!m.rotor_is_speed || (c >= t.thrust_coefficient_low && c <= t.thrust_coefficient_high &&
+                                  (spacing_over_arm == 0.0 ||
+                                   spacing_coefficient(mass, arm, thrust_mean) <= t.spacing_thrust_coefficient_high)));
   };
   const double mass = v.mass_kg, thrust = m.thrust_mean;
   const std::string measured =
       "mass " + ShortNumber(mass) + " kg, arm " + ShortNumber(r) + " m: m/r^3 " + ShortNumber(density(mass, r)) +
       " kg/m^3" +
       (m.rotor_is_speed ? ", kt from hover " + ShortNumber(mass * m.gravity / thrust) +
-                              " N s^2 = " + ShortNumber(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)"
+                              " N s^2 = " + ShortNumber(coefficient(mass, r, thrust)) + " rho r^4 / (4 pi^2)" +
+                              (spacing_over_arm > 0.0
+                                   ? " = " + ShortNumber(spacing_coefficient(mass, r, thrust)) +
+                                         " rho d^4 / (4 pi^2) with d " + ShortNumber(m.spacing_m) + " m between rotors"
+                                   : "")
                         : "");
   if (fits(mass, r, thrust)) {
     *plausible_kt = m.rotor_is_speed;
@@ -239,10 +426,31 @@ Check ScaleCheck(const FlightMetrics& m, const FlightData& raw, const InputCheck
   else if (m.rotor_is_speed && fits(mass, r, rpm_thrust))
     cause = "the rotor speeds of " + source + " appear to be in rpm: give |Omega| in rad/s (multiply by " +
             ShortNumber(kRpmToRadps) + ")";
+  else if (m.rotor_is_speed && fits(mass, r, thrust * 4.0 * M_PI * M_PI))
+    cause = "the rotor speeds of " + source +
+            " appear to be in rev/s (kt would be 39.5 times what propellers of this size give): give |Omega| in "
+            "rad/s (multiply by 2 pi; a column map: unit rev/s)";
   else
     cause = "mass, rotor positions and rotor speeds do not fit a multirotor: check their units (kg, m, rad/s) in " +
             VehicleFile(v) + " and " + source;
   return {"vehicle_scale", CheckStatus::kError, cause + " (" + measured + ")"};
+}
+
+// The rotor moments against the angular acceleration, turned about z (MeasureMomentYaw): an IMU
+// yawed against the body (board alignment) or an X layout flown as + correlates at cos 45 deg =
+// 0.71 per axis, which the pattern check accepts. Fitted on the samples, not on the per-rotor
+// pattern, whose regression is ill-conditioned when the rotors move together; differing roll and
+// pitch inertia bias it only as far as roll and pitch moments correlate.
+Check ImuYawCheck(const FlightMetrics& m, const FlightData& raw, const InputCheckThresholds& t) {
+  const double yaw_deg = m.moment_yaw_deg;
+  const std::string measured = "the rotor moments turned " + ShortNumber(yaw_deg) +
+                               " deg about z from what the rotor positions of " + VehicleFile(raw.vehicle) +
+                               " give, correlation " + ShortNumber(m.moment_yaw_correlation);
+  if (std::abs(yaw_deg) <= t.imu_yaw_deg) return {"imu_yaw", CheckStatus::kOk, raw.log.source + ": " + measured};
+  return {"imu_yaw", m.rotor_is_measured_speed ? CheckStatus::kError : CheckStatus::kWarning,
+          raw.log.source + ": the IMU appears yawed against the rotors (" + measured +
+              "): rotate the gyro and accelerometer into the body frame (the board's mounting), or fix the layout in " +
+              VehicleFile(raw.vehicle) + " (an X vehicle given as +, or the reverse)"};
 }
 
 // Which rotor makes which moment: the measured pattern against the vehicle file's positions and
@@ -298,6 +506,7 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
                             ": check the rotor order and positions (" + measured + ")"});
     return checks;
   }
+  checks.push_back(ImuYawCheck(m, raw, t));
   if (!plausible_kt) return checks;
   // Angular acceleration per unit Omega_i^2 is kt y_i / I_xx (roll) and -kt x_i / I_yy (pitch).
   const double kt = v.mass_kg * m.gravity / m.thrust_mean, reference = v.mass_kg * m.arm_m * m.arm_m;
@@ -309,16 +518,19 @@ std::vector<Check> RotorChecks(const FlightMetrics& m, const FlightData& raw, bo
   }
   const double ratio = std::exp(log_ratio);
   const std::string inertia = "apparent roll/pitch inertia from the rotor moments " + ShortNumber(ratio) + " m r^2";
-  if (ratio >= t.inertia_ratio_low && ratio <= t.inertia_ratio_high) {
+  const double high = m.rotor_is_measured_speed ? t.inertia_ratio_high_measured_speed : t.inertia_ratio_high;
+  const auto plausible = [&](double value) { return value >= t.inertia_ratio_low && value <= high; };
+  if (plausible(ratio)) {
     checks.push_back({"gyro_units", CheckStatus::kOk, source + ": " + inertia});
   } else {
-    const bool degrees = ratio * kRadToDeg >= t.inertia_ratio_low && ratio * kRadToDeg <= t.inertia_ratio_high;
-    checks.push_back({"gyro_units", CheckStatus::kError,
-                      source + ": " +
-                          (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
-                                         ShortNumber(kDegToRad) + ")"
-                                   : "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)") +
-                          " (" + inertia + ")"});
+    std::string cause = "the gyro and the rotor moments disagree by far: check the gyro units (rad/s)";
+    if (plausible(ratio * kRadToDeg))
+      cause = "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " + ShortNumber(kDegToRad) + ")";
+    else if (plausible(ratio * kDegToRad))
+      cause =
+          "the gyro reads 57 times too little: rad/s data converted as deg/s (a column map's gyro unit: rad/s, "
+          "not deg/s)";
+    checks.push_back({"gyro_units", CheckStatus::kError, source + ": " + cause + " (" + inertia + ")"});
   }
   return checks;
 }
@@ -335,14 +547,78 @@ std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::v
     const Check acc = AccelerometerCheck(m, source, thresholds), motion = MotionCheck(m, source, thresholds);
     checks.push_back(acc);
     checks.push_back(motion);
+    const Check gyro_rate = CheckGyroRate(raw[k].log);
+    checks.push_back(gyro_rate);
+    checks.push_back(SaturationCheck(raw[k].log));
+    if (motion.status != CheckStatus::kError) checks.push_back(RotorSignalCheck(m, source));
+    if (raw[k].log.mocap && motion.status != CheckStatus::kError) {
+      checks.push_back(AttitudeCheck(raw[k].log));
+      checks.push_back(StateJumpCheck(raw[k].log));
+    }
     // The checks below read the rotor data against the IMU: only once the IMU and motion are sane.
-    if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError) continue;
+    if (acc.status == CheckStatus::kError || motion.status == CheckStatus::kError ||
+        gyro_rate.status == CheckStatus::kError)
+      continue;
     const Check airborne = AirborneCheck(m, source);
     checks.push_back(airborne);
     bool plausible_kt = false;
     checks.push_back(ScaleCheck(m, raw[k], thresholds, &plausible_kt));
     if (airborne.status == CheckStatus::kError) continue;
     for (Check& c : RotorChecks(m, raw[k], plausible_kt, thresholds)) checks.push_back(std::move(c));
+  }
+  return checks;
+}
+
+Check CheckGyroRate(const FlightLog& log) {
+  constexpr double kHighRadps = 12.0;  // 690 deg/s as the median
+  std::vector<double> rates(static_cast<size_t>(log.num_samples()));
+  for (Eigen::Index i = 0; i < log.num_samples(); ++i) rates[static_cast<size_t>(i)] = log.gyro_radps.row(i).norm();
+  const double median = Median(rates);
+  const std::string measured = "median |gyro| " + ShortNumber(median) + " rad/s";
+  if (median <= kHighRadps) return {"gyro_rate", CheckStatus::kOk, log.source + ": " + measured};
+  const bool degrees = median * kDegToRad <= kHighRadps;
+  return {"gyro_rate", CheckStatus::kError,
+          log.source + ": " +
+              (degrees ? "the gyro appears to be in deg/s: give rad/s (multiply gyro_x..z by " +
+                             ShortNumber(kDegToRad) + "; a column map: unit deg/s)"
+                       : "the gyro columns turn faster than any multirotor: check their units (rad/s)") +
+              " (" + measured + ")"};
+}
+
+std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
+                                 double cutoff_hz) {
+  if (raw.size() != processed.size()) throw Error("CheckTimeBase: raw and processed flights differ in number");
+  // fs / cut-off below these: an error (-11 % on sim A), a warning (-5 %).
+  constexpr double kRateRatioError = 8.0, kRateRatioWarning = 12.0;
+  // Time-stamp resolution over the sample interval above this: a warning (1.7e9 s at 200 Hz: 4.8e-5).
+  constexpr double kResolutionError = 1e-5;
+  std::vector<Check> checks;
+  for (size_t k = 0; k < raw.size(); ++k) {
+    const std::string& source = raw[k].log.source;
+    const double dt = processed[k].dt_s, rate_hz = 1.0 / dt, ratio = rate_hz / cutoff_hz;
+    const std::string rate = ShortNumber(rate_hz) + " Hz samples, " + ShortNumber(cutoff_hz) + " Hz cut-off (" +
+                             ShortNumber(ratio) + " samples per cut-off period)";
+    if (ratio < kRateRatioWarning)
+      checks.push_back({"sample_rate", ratio < kRateRatioError ? CheckStatus::kError : CheckStatus::kWarning,
+                        source + ": the log is sampled too slowly for the low-pass cut-off (" + rate +
+                            "): the derivatives lose amplitude and kd and I_zz come out low (sim: -11 % at 5, -5 % "
+                            "at 10); give --cutoff-hz " +
+                            ShortNumber(rate_hz / 20.0) + " or lower"});
+    else
+      checks.push_back({"sample_rate", CheckStatus::kOk, source + ": " + rate});
+    const Eigen::VectorXd& t = raw[k].log.t_s;
+    const double largest = t.size() > 0 ? std::max(std::abs(t[0]), std::abs(t[t.size() - 1])) : 0.0;
+    const double resolution = largest * std::numeric_limits<double>::epsilon();
+    const std::string stamps = "time stamps up to " + ShortNumber(largest) + " s resolve " + ShortNumber(resolution) +
+                               " s, " + ShortNumber(resolution / dt) + " of the sample interval";
+    if (resolution / dt > kResolutionError)
+      // A warning: the bias is a few % (NanoBench's UNIX-epoch CSVs at 100 Hz read 3.9e-5), not a wrong unit.
+      checks.push_back({"time_base", CheckStatus::kWarning,
+                        source + ": the " + stamps +
+                            " (a UNIX epoch?), which biases kd and I_zz by a few %: subtract the first time stamp "
+                            "(t - t[0]) before identifying"});
+    else
+      checks.push_back({"time_base", CheckStatus::kOk, source + ": " + stamps});
   }
   return checks;
 }
@@ -590,6 +866,8 @@ IdentificationResult IdentifyWithChecks(std::vector<FlightData> flights, const I
   std::vector<ProcessedFlight> processed =
       ProcessFlights(flights, options.observation, OffsetProgress(progress, 0, total_steps));
   *checks = CheckFlights(flights, processed);
+  for (Check& c : CheckTimeBase(flights, processed, options.observation.filter.cutoff_hz))
+    checks->push_back(std::move(c));
   const int num_flights = static_cast<int>(flights.size());
   flights = {};
   IdentificationResult result;

@@ -63,13 +63,47 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
   }
 }
 
-std::string ReadFile(const std::string& path) {
+namespace {
+
+std::string SizeText(std::uint64_t bytes) {
+  return bytes >= (1u << 20) ? std::to_string(bytes >> 20) + " MB" : std::to_string(bytes) + " bytes";
+}
+
+// The refusal of an input that is neither a regular file of at most `max_bytes` nor, where allowed, a
+// pipe ("" when it is one). A device (/dev/zero) would be read until memory runs out.
+std::string InputFileProblem(const std::string& path, const struct stat& info, std::uint64_t max_bytes,
+                             bool pipe_allowed) {
+  if (S_ISDIR(info.st_mode)) return path + ": is a folder, not a file";
+  if (S_ISFIFO(info.st_mode) && !pipe_allowed)
+    return path + ": is a pipe (FIFO); a log is read twice (its format, then its content): give a file";
+  if (!S_ISREG(info.st_mode) && !S_ISFIFO(info.st_mode))
+    return path + ": is not a regular file (a device or socket): rotorid reads its inputs from files";
+  if (static_cast<std::uint64_t>(info.st_size) > max_bytes)
+    return path + ": " + SizeText(static_cast<std::uint64_t>(info.st_size)) + ", more than the " + SizeText(max_bytes) +
+           " rotorid reads for this input: is it the right file?";
+  return {};
+}
+
+}  // namespace
+
+void RequireInputFile(const std::string& path, std::uint64_t max_bytes) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) throw Error(path + ": cannot open: " + std::strerror(errno));
+  if (const std::string problem = InputFileProblem(path, info, max_bytes, /*pipe_allowed=*/false); !problem.empty())
+    throw Error(problem);
+}
+
+std::string ReadFile(const std::string& path, std::uint64_t max_bytes) {
   struct ClosedAtExit {
     int fd;
     ~ClosedAtExit() { ::close(fd); }
   };
   const ClosedAtExit file{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
   if (file.fd < 0) throw Error(path + ": cannot open: " + std::strerror(errno));
+  struct stat info {};
+  if (::fstat(file.fd, &info) != 0) throw Error(path + ": cannot read: " + std::strerror(errno));
+  if (const std::string problem = InputFileProblem(path, info, max_bytes, /*pipe_allowed=*/true); !problem.empty())
+    throw Error(problem);
   auto read_some = [&](char* into, size_t size) {
     for (;;) {
       const ssize_t got = ::read(file.fd, into, size);
@@ -77,12 +111,10 @@ std::string ReadFile(const std::string& path) {
       if (errno != EINTR) throw Error(path + ": read failed: " + std::strerror(errno));
     }
   };
-  // Straight into one allocation of the file's size where it is known (a string stream held a long
-  // log, 100 MB for 1 h at 200 Hz, up to three times over, and a buffered stream copies it once
-  // more); past that size (a pipe, a file that grows) in chunks.
-  std::string content;
-  struct stat info {};
-  if (::fstat(file.fd, &info) == 0 && S_ISREG(info.st_mode)) content.resize(static_cast<size_t>(info.st_size));
+  // Straight into one allocation of the file's size (a string stream held a long log, 100 MB for
+  // 1 h at 200 Hz, up to three times over, and a buffered stream copies it once more); a pipe, or a
+  // file that grows while it is read, in chunks up to the cap.
+  std::string content(S_ISREG(info.st_mode) ? static_cast<size_t>(info.st_size) : 0, '\0');
   size_t done = 0;
   while (done < content.size()) {
     const size_t got = read_some(content.data() + done, content.size() - done);
@@ -91,7 +123,12 @@ std::string ReadFile(const std::string& path) {
   }
   content.resize(done);
   char chunk[1 << 16];
-  while (const size_t got = read_some(chunk, sizeof chunk)) content.append(chunk, got);
+  while (const size_t got = read_some(chunk, sizeof chunk)) {
+    if (content.size() + got > max_bytes)
+      throw Error(path + ": more than the " + SizeText(max_bytes) +
+                  " rotorid reads for this input: is it the right file?");
+    content.append(chunk, got);
+  }
   return content;
 }
 

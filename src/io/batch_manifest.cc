@@ -7,6 +7,7 @@
 
 #include "io/yaml_fields.h"
 #include "rotorid/core/error.h"
+#include "rotorid/io/yaml_document.h"
 
 namespace rotorid {
 
@@ -22,8 +23,10 @@ std::string Scalar(const std::string& source, const YAML::Node& node, const std:
   return node.as<std::string>();
 }
 
-std::string KeyOf(const std::string& log, const std::string& vehicle, const nlohmann::json& window) {
-  return nlohmann::json{log, vehicle, window}.dump();
+// Log, vehicle, window and options: a sweep lists one log several times with different options.
+std::string KeyOf(const std::string& log, const std::string& vehicle, const nlohmann::json& window,
+                  const nlohmann::json& options) {
+  return nlohmann::json{log, vehicle, window, options.empty() ? nlohmann::json::object() : options}.dump();
 }
 
 nlohmann::json WindowJson(const std::optional<TimeWindow>& window) {
@@ -53,11 +56,11 @@ BatchEntry ReadEntry(const std::string& source, const YAML::Node& node, const st
       } else {
         values.push_back(Scalar(source, option.second, "an option's value"));
       }
-      entry.options.emplace_back(option.first.as<std::string>(), std::move(values));
+      entry.options.emplace_back(Scalar(source, option.first, "an option's name"), std::move(values));
     }
   }
   for (const auto& field : node) {
-    const std::string key = field.first.as<std::string>();
+    const std::string key = Scalar(source, field.first, "a key");
     if (key != "vehicle" && key != "log" && key != "window" && key != "options")
       internal::FailAt(source, field.first, "unknown key '" + key + "' (vehicle, log, window, options)");
   }
@@ -66,14 +69,21 @@ BatchEntry ReadEntry(const std::string& source, const YAML::Node& node, const st
 
 }  // namespace
 
-std::string BatchEntry::Key() const { return KeyOf(log, vehicle, WindowJson(window)); }
+std::string BatchEntry::Key() const { return KeyOf(log, vehicle, WindowJson(window), OptionsJson()); }
+
+nlohmann::json BatchEntry::OptionsJson() const {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [name, values] : options) out[name] = values;
+  return out;
+}
 
 std::vector<BatchEntry> ReadBatchManifest(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open the manifest");
-  std::ostringstream text;
-  text << in.rdbuf();
-  const YAML::Node root = internal::LoadYaml(text.str(), path);
+  // A manifest lists thousands of logs: 4 MB, about 50 000 entries.
+  return ParseBatchManifest(ReadFile(path, std::uint64_t{4} << 20), path);
+}
+
+std::vector<BatchEntry> ParseBatchManifest(const std::string& text, const std::string& path) {
+  const YAML::Node root = internal::LoadYaml(text, path);
   if (!root.IsMap() || !root["logs"] || !root["logs"].IsSequence())
     throw Error(path + ": a manifest is a map with 'logs:', a list of {vehicle, log, window, options}");
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
@@ -107,15 +117,25 @@ std::optional<std::string> BatchLineKey(const std::string& line) {
   if (!j.is_object() || !j.contains("log") || !j.contains("vehicle") || !j["log"].is_string() ||
       !j["vehicle"].is_string())
     return std::nullopt;
-  return KeyOf(j["log"], j["vehicle"], j.value("window", nlohmann::json()));
+  const nlohmann::json options = j.value("options", nlohmann::json::object());
+  return KeyOf(j["log"], j["vehicle"], j.value("window", nlohmann::json()), options);
 }
 
-std::set<std::string> CompletedBatchEntries(const std::string& output_path) {
-  std::set<std::string> keys;
+BatchOutput ReadBatchOutput(const std::string& output_path) {
+  BatchOutput output;
   std::ifstream in(output_path);
-  for (std::string line; std::getline(in, line);)
-    if (const auto key = BatchLineKey(line)) keys.insert(*key);
-  return keys;
+  std::string line;
+  while (std::getline(in, line)) {
+    // A last line without its newline was cut short, even when what was written parses.
+    const auto key = in.eof() ? std::nullopt : BatchLineKey(line);
+    if (!key) {
+      output.broken_lines += line.empty() ? 0 : 1;
+      continue;
+    }
+    output.done.insert(*key);
+    output.complete_lines += line + "\n";
+  }
+  return output;
 }
 
 }  // namespace rotorid

@@ -351,7 +351,7 @@ ColumnMap ParseColumnMap(const std::string& text, const std::string& source) {
   return map;
 }
 
-ColumnMap ReadColumnMap(const std::string& path) { return ParseColumnMap(ReadFile(path), path); }
+ColumnMap ReadColumnMap(const std::string& path) { return ParseColumnMap(ReadFile(path, kMaxYamlFileBytes), path); }
 
 // ---- The CSV ----
 

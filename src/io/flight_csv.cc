@@ -22,13 +22,18 @@ namespace {
 
 using internal::TrimSpaces;
 
+// Spreadsheets quote cells ("t","gyro_x"; "0.01"): the quotes are not part of the value.
+std::string_view Unquoted(std::string_view cell) {
+  return cell.size() >= 2 && cell.front() == '"' && cell.back() == '"' ? cell.substr(1, cell.size() - 2) : cell;
+}
+
 std::vector<std::string_view> SplitCells(std::string_view line) {
   std::vector<std::string_view> cells;
   size_t start = 0;
   while (true) {
     const size_t comma = line.find(',', start);
-    cells.push_back(
-        TrimSpaces(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    cells.push_back(Unquoted(
+        TrimSpaces(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start))));
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
@@ -68,10 +73,10 @@ struct FlightTable {
   bool has_header = false;
   int header_line = 0;
   std::string_view header_text;
-  std::vector<std::string> names;         // per cell
-  std::vector<bool> known;                // per cell: a column rotorid reads
-  std::map<std::string, int> index;       // name -> cell
-  std::vector<TableRows> parts;           // the rows, in file order, as the stretches read them
+  std::vector<std::string> names;    // per cell
+  std::vector<bool> known;           // per cell: a column rotorid reads
+  std::map<std::string, int> index;  // name -> cell
+  std::vector<TableRows> parts;      // the rows, in file order, as the stretches read them
 
   std::optional<int> Find(const std::string& name) const {
     const auto it = index.find(name);
@@ -122,6 +127,14 @@ void ReadHeader(const internal::TextLine& line, FlightTable* table) {
   table->header_line = line.number;
   table->header_text = line.text;
   const auto names = SplitCells(line.text);
+  // Another tool's separator: one cell where a dozen were expected.
+  const std::pair<char, const char*> separators[] = {{';', "';'"}, {'\t', "tab"}, {' ', "whitespace"}};
+  for (const auto& [separator, delimiter] : separators)
+    if (names.size() == 1 && names[0].find(separator) != std::string_view::npos)
+      throw Error(Located(table->source, line.number, 0,
+                          std::string("the header is not separated by commas but by ") + delimiter +
+                              ": convert the file, or read it through a column map with delimiter: " + delimiter +
+                              " (docs/input_formats.md)"));
   for (size_t k = 0; k < names.size(); ++k) {
     const std::string name(names[k]);
     table->names.push_back(name);
@@ -155,7 +168,7 @@ void ReadRow(const internal::TextLine& line, const FlightTable& table, TableRows
       rows->data[k].push_back(number);
       continue;
     }
-    const std::string_view cell = TrimSpaces(raw);
+    const std::string_view cell = Unquoted(TrimSpaces(raw));
     const std::optional<double> value = internal::ParseNumber(cell);
     if (!value) {
       throw Error(Located(table.source, line.number, CellColumn(line.text, k),
@@ -241,6 +254,8 @@ FlightTable ReadTable(const std::string& text, const std::string& source) {
   FlightTable table;
   table.source = source;
   std::string_view rest(text);
+  // A UTF-8 byte-order mark (spreadsheet exports) would become part of the first column's name.
+  if (rest.substr(0, 3) == "\xEF\xBB\xBF") rest.remove_prefix(3);
   int line_number = 0;
   internal::TextLine line;
   while (!table.has_header && internal::NextLine(&rest, &line_number, &line)) {

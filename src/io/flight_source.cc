@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "rotorid/core/error.h"
+#include "rotorid/io/atomic_file.h"
 #include "rotorid/io/blackbox.h"
 #include "rotorid/io/blackbox_flight.h"
 #include "rotorid/io/column_map.h"
@@ -19,6 +20,8 @@ std::string FlightSourceOptions::Validate() const {
 }
 
 LogFormat DetectLogFormat(const std::string& path) {
+  // Before any reader: a device (/dev/zero), a FIFO or an oversized file is refused by its path.
+  RequireInputFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open");
   char head[256] = {};

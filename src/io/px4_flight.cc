@@ -1,6 +1,6 @@
-#include "rotorid/core/units.h"
 #include "rotorid/io/px4_flight.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "rotorid/core/error.h"
+#include "rotorid/core/text.h"
+#include "rotorid/core/units.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/signal/resample.h"
@@ -205,7 +205,21 @@ class Px4Mapper {
     throw Error(log_.source + ": no " + what + " in this PX4 log; looked for " + looked_for);
   }
 
-  void Finalize(Stream* s) { dropped_samples_ += MakeStrictlyIncreasing(s); }
+  // A few repeated or early stamps are dropped (counted in px4_dropped_samples); a step back (a time
+  // reset) would drop everything up to the old time again: an error, not a silent loss.
+  void Finalize(Stream* s) {
+    const size_t before = s->t_us.size();
+    size_t step = 1;  // the first sample stamped before the one preceding it
+    while (step < before && s->t_us[step] >= s->t_us[step - 1]) ++step;
+    const double back_s = step < before ? 1e-6 * static_cast<double>(s->t_us[step - 1] - s->t_us[step]) : 0.0;
+    const double at_s = step < before ? 1e-6 * static_cast<double>(s->t_us[step - 1]) : 0.0;
+    const int dropped = MakeStrictlyIncreasing(s);
+    if (static_cast<size_t>(dropped) > std::max<size_t>(10, before / 100))
+      throw Error(log_.source + ": the time stamps of " + s->label + " step back by " + ShortNumber(back_s) +
+                  " s after " + ShortNumber(at_s) + " s (a time reset): " + std::to_string(dropped) + " of " +
+                  std::to_string(before) + " samples would be lost; split the log at the reset");
+    dropped_samples_ += dropped;
+  }
 
   void LoadImu(Stream* gyro, Stream* acc) {
     Px4ImuSource source = options_.imu;

@@ -5,12 +5,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <unordered_map>
 
 #include "rotorid/core/error.h"
+#include "rotorid/io/atomic_file.h"
 
 namespace rotorid {
 namespace {
@@ -728,14 +728,7 @@ ULog ParseULog(const void* data, size_t size, const std::string& source_name, co
 }
 
 ULog ReadULog(const std::string& path, const ULogReadOptions& options) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open");
-  in.seekg(0, std::ios::end);
-  const std::streamoff length = in.tellg();
-  if (length < 0) throw Error(path + ": cannot read");
-  in.seekg(0, std::ios::beg);
-  std::vector<uint8_t> bytes(static_cast<size_t>(length));
-  if (length > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), length)) throw Error(path + ": cannot read");
+  const std::string bytes = ReadFile(path);
   return ParseULog(bytes.data(), bytes.size(), path, options);
 }
 

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <iomanip>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "io/yaml_fields.h"
@@ -40,11 +42,28 @@ void ReadKnownEffects(const YAML::Node& root, const std::string& source, Vehicle
   }
 }
 
+// A misspelt optional key (rotor_raduis) would silently leave its value out: an error instead.
+void RejectUnknownKeys(const YAML::Node& root, const std::string& source) {
+  std::set<std::string> known = {"name",         "mass",      "rotors", "command_to_speed", "command_to_speed_voltage",
+                                 "rotor_radius", "simulation"};  // the simulator's true parameters (docs/simulator.md)
+  for (EffectKind kind : AllEffects())
+    if (!kind->info().vehicle_key.empty()) known.insert(kind->info().vehicle_key);
+  for (const auto& entry : root) {
+    const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "";
+    if (known.count(key)) continue;
+    std::string list;
+    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+    internal::FailAt(source, entry.first,
+                     "unknown key '" + ShortText(key, 80) + "' (a vehicle file knows " + list + ")");
+  }
+}
+
 }  // namespace
 
 Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
   const YAML::Node root = internal::LoadYaml(text, source);
   if (!root.IsMap()) throw Error(source + ": a vehicle file must be a YAML mapping with name, mass and rotors");
+  RejectUnknownKeys(root, source);
   Vehicle vehicle;
   if (const YAML::Node name = root["name"]) {
     if (!name.IsScalar() || name.Scalar().empty()) internal::FailAt(source, name, "name must be a non-empty string");
@@ -104,7 +123,7 @@ Vehicle ParseVehicleYaml(const std::string& text, const std::string& source) {
 }
 
 Vehicle ReadVehicleYaml(const std::string& path) {
-  Vehicle vehicle = ParseVehicleYaml(ReadFile(path), path);
+  Vehicle vehicle = ParseVehicleYaml(ReadFile(path, kMaxYamlFileBytes), path);
   vehicle.source = path;
   return vehicle;
 }
@@ -112,7 +131,8 @@ Vehicle ReadVehicleYaml(const std::string& path) {
 std::string VehicleToYaml(const Vehicle& vehicle) {
   std::ostringstream out;
   out << std::setprecision(10);
-  out << "name: " << vehicle.name << "\n";
+  // Quoted (a JSON string is a YAML double-quoted scalar): a name like "A: #1" stays one string.
+  out << "name: " << nlohmann::json(vehicle.name).dump() << "\n";
   out << "mass: " << vehicle.mass_kg << "  # kg\n";
   out << "rotors:  # position in F_d (m); spin +1 = counter-clockwise seen from above\n";
   for (const Rotor& r : vehicle.rotors) {

@@ -1,7 +1,9 @@
 #include "io/yaml_fields.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <string_view>
 
 #include "rotorid/core/error.h"
 
@@ -9,32 +11,71 @@ namespace rotorid::internal {
 
 namespace {
 
-// yaml-cpp keeps both entries of a repeated key and lookups see only one: an error instead.
-void RejectDuplicateKeys(const std::string& source, const YAML::Node& node) {
-  if (node.IsSequence()) {
-    for (const YAML::Node& item : node) RejectDuplicateKeys(source, item);
-  } else if (node.IsMap()) {
-    std::set<std::string> keys;
-    for (const auto& entry : node) {
-      if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second)
-        FailAt(source, entry.first, "duplicate key '" + entry.first.Scalar() + "'");
-      RejectDuplicateKeys(source, entry.second);
+// Walks the tree as its readers will, aliases expanded, within a budget of nodes. yaml-cpp keeps
+// both entries of a repeated key and lookups see only one: an error instead.
+class TreeCheck {
+ public:
+  TreeCheck(const std::string& source, size_t text_size) : source_(source), budget_(2 * text_size + 1000) {}
+
+  void Visit(const YAML::Node& node, int depth = 0) {
+    if (++visited_ > budget_)
+      FailAt(source_, node,
+             "aliases (*name) expand this document beyond " + std::to_string(budget_) +
+                 " nodes: write the values out instead of repeating anchors");
+    // Anchors chained through aliases nest without bound (and each reader recurses).
+    if (depth > kMaxDepth) FailAt(source_, node, "nested deeper than " + std::to_string(kMaxDepth) + " levels");
+    if (node.IsSequence()) {
+      for (const YAML::Node& item : node) Visit(item, depth + 1);
+    } else if (node.IsMap()) {
+      std::set<std::string> keys;
+      for (const auto& entry : node) {
+        Visit(entry.first, depth + 1);
+        if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second)
+          FailAt(source_, entry.first, "duplicate key '" + entry.first.Scalar() + "'");
+        Visit(entry.second, depth + 1);
+      }
     }
   }
+
+ private:
+  static constexpr int kMaxDepth = 200;
+  const std::string& source_;
+  const size_t budget_;
+  size_t visited_ = 0;
+};
+
+// The line (1-based) where a second document starts, 0 when there is none: a `---` after content, or
+// content after a `...` end marker. By the lines, since yaml-cpp 0.7's LoadAll never returns on some
+// inputs (",e,").
+int SecondDocumentLine(const std::string& text) {
+  // Whether `line` from `from` on holds more than blanks and a comment.
+  const auto holds_content = [](std::string_view line, size_t from) {
+    const size_t first = line.find_first_not_of(" \t\r", from);
+    return first != std::string_view::npos && line[first] != '#';
+  };
+  bool content = false, ended = false;
+  int number = 0;
+  for (size_t start = 0; start < text.size(); ++number) {
+    const size_t end = std::min(text.find('\n', start), text.size());
+    const std::string_view line(text.data() + start, end - start);
+    start = end + 1;
+    const auto marker = [&line](const char* m) {
+      return line.compare(0, 3, m) == 0 && (line.size() == 3 || line[3] == ' ' || line[3] == '\t' || line[3] == '\r');
+    };
+    if (marker("---")) {
+      if (content || ended) return number + 1;
+      content = holds_content(line, 3);
+    } else if (marker("...")) {
+      ended = content;
+    } else if (!line.empty() && line[0] != '%' && holds_content(line, 0)) {
+      if (ended) return number + 1;
+      content = true;
+    }
+  }
+  return 0;
 }
 
 }  // namespace
-
-YAML::Node LoadYaml(const std::string& text, const std::string& source) {
-  try {
-    YAML::Node root = YAML::Load(text);
-    RejectDuplicateKeys(source, root);
-    return root;
-  } catch (const YAML::Exception& e) {
-    throw Error(Located(source, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1,
-                        "not valid YAML: " + e.msg));
-  }
-}
 
 void FailAt(const std::string& source, const YAML::Node& node, const std::string& message) {
   const YAML::Mark mark = node.Mark();
@@ -50,3 +91,26 @@ double ReadYamlNumber(const std::string& source, const YAML::Node& node, const s
 }
 
 }  // namespace rotorid::internal
+
+namespace rotorid {
+
+YAML::Node LoadYaml(const std::string& text, const std::string& source) {
+  if (const int line = internal::SecondDocumentLine(text); line > 0)
+    throw Error(Located(source, line, 1,
+                        "a second YAML document: rotorid reads one document per file; remove it or give it its own "
+                        "file"));
+  try {
+    const YAML::Node root = YAML::Load(text);
+    internal::TreeCheck(source, text.size()).Visit(root);
+    return root;
+  } catch (const YAML::Exception& e) {
+    throw Error(Located(source, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1,
+                        "not valid YAML: " + e.msg));
+  }
+}
+
+YAML::Node LoadYamlFile(const std::string& path, std::uint64_t max_bytes) {
+  return LoadYaml(ReadFile(path, max_bytes), path);
+}
+
+}  // namespace rotorid

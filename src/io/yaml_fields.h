@@ -7,10 +7,13 @@
 
 #include <string>
 
+#include "rotorid/io/yaml_document.h"
+
 namespace rotorid::internal {
 
-// Parses `text`; a syntax error becomes a rotorid::Error located in `source`.
-YAML::Node LoadYaml(const std::string& text, const std::string& source);
+// LoadYaml and LoadYamlFile: rotorid/io/yaml_document.h.
+using rotorid::LoadYaml;
+using rotorid::LoadYamlFile;
 
 // Throws rotorid::Error "source:line:column: message" at `node` (no position when it has none).
 [[noreturn]] void FailAt(const std::string& source, const YAML::Node& node, const std::string& message);

@@ -179,7 +179,7 @@ SimulationVehicle ParseSimulationVehicle(const std::string& text, const std::str
 }
 
 SimulationVehicle LoadSimulationVehicle(const std::string& path) {
-  return ParseSimulationVehicle(ReadFile(path), path);
+  return ParseSimulationVehicle(ReadFile(path, kMaxYamlFileBytes), path);
 }
 
 }  // namespace rotorid

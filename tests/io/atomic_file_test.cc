@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <csignal>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <thread>
 
@@ -47,6 +49,37 @@ TEST(ReadFile, ReadsAPipeToItsEnd) {
   const std::string read = ReadFile(path);
   writer.join();
   EXPECT_EQ(read, Bytes());
+}
+
+// A device would be read until memory runs out (--log /dev/zero grew to 17 GB): refused by its path;
+// a file or a pipe beyond the cap is refused by its size, naming both.
+TEST(ReadFile, RefusesDevicesAndInputsBeyondTheCap) {
+  auto error_of = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_NE(error_of([] { ReadFile("/dev/zero"); }).find("/dev/zero: is not a regular file"), std::string::npos);
+  const std::string dir = testing::MakeTempDir("read_file");
+  WriteFileAtomically(dir + "/big.yaml", std::string(2000, 'x'));
+  EXPECT_EQ(ReadFile(dir + "/big.yaml", 2000).size(), 2000u);
+  EXPECT_NE(error_of([&] { ReadFile(dir + "/big.yaml", 1999); }).find("big.yaml: 2000 bytes, more than the 1999 bytes"),
+            std::string::npos);
+  const std::string pipe = dir + "/pipe";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  EXPECT_NE(error_of([&] { RequireInputFile(pipe); }).find("is a pipe"), std::string::npos);
+  std::signal(SIGPIPE, SIG_IGN);  // the reader stops at the cap: the writer's rest fails with EPIPE
+  std::thread writer([&pipe] {
+    std::FILE* out = std::fopen(pipe.c_str(), "wb");
+    const std::string bytes = Bytes();
+    if (out) std::fwrite(bytes.data(), 1, bytes.size(), out);
+    if (out) std::fclose(out);
+  });
+  EXPECT_NE(error_of([&] { ReadFile(pipe, 100'000); }).find("more than the 100000 bytes"), std::string::npos);
+  writer.join();
 }
 
 TEST(ReadFile, NamesThePathItCannotOpen) {

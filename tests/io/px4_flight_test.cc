@@ -2,14 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "rotorid/core/error.h"
 #include "rotorid/io/flight_source.h"
@@ -96,6 +95,7 @@ struct SyntheticLog {
   Eigen::Vector3d position_ned{1.0, 2.0, -3.0};
   Eigen::Vector3d roll_pitch_yaw_ned{0.1, 0.2, 0.5};  // PX4's Euler angles (ZYX) of R_ned_frd
   bool with_imu = true, with_motors = true, with_esc = false;
+  uint64_t imu_step_back_us = 0;  // the IMU's clock steps back by this much half way (a time reset)
 
   std::string Build() const {
     ULogWriter w;
@@ -126,7 +126,7 @@ struct SyntheticLog {
     for (int k = 0; k < 400; ++k) {  // 2 s at 200 Hz
       const uint64_t t = 1000000 + 5000 * static_cast<uint64_t>(k);
       if (with_imu)
-        w.Data(1, t,
+        w.Data(1, k >= 200 ? t - imu_step_back_us : t,
                {float(gyro_frd.x()), float(gyro_frd.y()), float(gyro_frd.z()), float(acc_frd.x()), float(acc_frd.y()),
                 float(acc_frd.z())});
       if (k % 10 == 0) {  // 20 Hz
@@ -196,6 +196,18 @@ TEST(Px4FlightSynthetic, FrdNedToFluZUpAndCommandMap) {
   EXPECT_NEAR((*flight.voltage_v)[0], 15.5, 1e-6);
   EXPECT_GE(flight.t_s[flight.num_samples() - 1], 0.9);
   for (int r = 1; r < flight.num_samples(); ++r) ASSERT_GT(flight.t_s[r], flight.t_s[r - 1]);
+}
+
+// A time reset of the IMU half way would drop every later sample up to the old time: an error naming
+// the topic and the step, not a flight silently cut (issue 42, item 8). A repeated stamp still passes.
+TEST(Px4FlightSynthetic, ImuTimeResetIsAnErrorNotASilentLoss) {
+  SyntheticLog synthetic;
+  synthetic.imu_step_back_us = 600000;
+  ExpectErrorContaining([&] { Px4FlightFromULog(ParseBytes(synthetic.Build()), 4, {}); },
+                        {"synthetic.ulg", "sensor_combined", "step back by 0.595 s", "120 of 400 samples"});
+  synthetic.imu_step_back_us = 5000;  // one repeated stamp
+  const FlightLog flight = Px4FlightFromULog(ParseBytes(synthetic.Build()), 4, {});
+  EXPECT_EQ(flight.metadata.at("px4_dropped_samples"), "2");  // in the gyro and the accelerometer stream
 }
 
 TEST(Px4FlightSynthetic, EscRpmMatchedByActuatorFunction) {

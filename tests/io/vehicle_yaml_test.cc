@@ -75,5 +75,32 @@ TEST(VehicleYaml, ErrorsNameTheLineAndColumn) {
   EXPECT_NE(ErrorOf("name: x\nrotors: []\n").find("missing 'mass'"), std::string::npos);
 }
 
+// The YAML loader every reader shares (issue 42): aliases within twice the document's size pass,
+// a bomb, deep nesting, a second document and inputs that hung yaml-cpp's LoadAll
+// (",e,", found by fuzz/yaml_fuzzer) are errors naming the file; a written name reads back.
+TEST(VehicleYaml, LoaderBoundsAliasesNestingAndDocuments) {
+  const std::string reused = std::string(kQuad) + "imu_position: &p [0, 0, 0]\nsimulation: {kt: 1e-8, ms: *p}\n";
+  EXPECT_EQ(ErrorOf(reused), "");
+  std::string bomb = "a0: &a0 [x, x, x, x, x, x, x, x, x]\n";
+  for (int i = 1; i < 7; ++i) {
+    bomb += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [";
+    for (int k = 0; k < 9; ++k) bomb += (k ? ", *a" : "*a") + std::to_string(i - 1);
+    bomb += "]\n";
+  }
+  EXPECT_NE(ErrorOf(bomb).find("v.yaml:"), std::string::npos);
+  EXPECT_NE(ErrorOf(bomb).find("aliases (*name) expand this document beyond"), std::string::npos) << ErrorOf(bomb);
+  const std::string chain = "name: " + std::string(300, '[') + std::string(300, ']') + "\n";
+  EXPECT_NE(ErrorOf(chain).find("nested deeper than 200 levels"), std::string::npos) << ErrorOf(chain);
+  EXPECT_NE(ErrorOf(std::string(kQuad) + "---\nmass: 1\n").find("v.yaml:8:1: a second YAML document"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(kQuad) + "...\nmass: 1\n").find("a second YAML document"), std::string::npos);
+  EXPECT_EQ(ErrorOf("---\n" + std::string(kQuad) + "...\n"), "");
+  EXPECT_NE(ErrorOf(",e,").find("v.yaml"), std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(kQuad) + "rotor_raduis: 0.02\n").find("unknown key 'rotor_raduis'"), std::string::npos);
+  Vehicle named = ParseVehicleYaml(kQuad, "v.yaml");
+  named.name = "A: #1 \"x\"";
+  EXPECT_EQ(ParseVehicleYaml(VehicleToYaml(named), "w.yaml").name, named.name);
+}
+
 }  // namespace
 }  // namespace rotorid

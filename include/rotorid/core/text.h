@@ -2,6 +2,7 @@
 
 // Numbers and lists in messages and reports.
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,9 @@ std::string FormatValue(const char* printf_format, double value);
 inline std::string ShortNumber(double value) { return FormatValue("%.3g", value); }
 // "a, b, c".
 std::string Join(const std::vector<std::string>& parts, const char* separator = ", ");
+// `text` if at most `max_chars` long, else its start and end around "... (N characters left out)
+// ...": a message quoting a cell or key of a malformed file stays one readable line.
+std::string ShortText(const std::string& text, size_t max_chars = 1000);
 bool EndsWith(const std::string& text, const std::string& suffix);
 
 }  // namespace rotorid

@@ -39,13 +39,24 @@ struct InputCheckThresholds {
   // kt from hover (m g / mean sum Omega^2) over rho r^4 / (4 pi^2): a thrust coefficient C_T (D/r)^4.
   double thrust_coefficient_low = 2e-3;
   double thrust_coefficient_high = 3.0;
+  // kt from hover over rho d^4 / (4 pi^2), d the smallest distance between two rotors (the largest
+  // propeller diameter that fits): the C_T propellers of that size would need. Real propellers
+  // stay below 0.2; a rotor speed in rev/s reads 39.5x high (sim A 0.011 -> 0.44, Crazyflie 0.036).
+  double spacing_thrust_coefficient_high = 0.25;
   // Apparent roll/pitch inertia (from the rotor moments and the gyro) over m r^2.
   double inertia_ratio_low = 0.01;
   // 50, not 5: jana00 (figure 8, little roll/pitch excitation) reads 4.5 with the RPM deck and 16.7
   // through the PWM map; a gyro in deg/s reads 57x low, which the lower bound catches.
   double inertia_ratio_high = 50.0;
+  // With a measured rotor speed (no command map blurring the pattern), real flights read at most
+  // 4.5 (jana00); rad/s data declared deg/s read 57x high (sim A 0.28 -> 16).
+  double inertia_ratio_high_measured_speed = 8.0;
   // The rotor-moment pattern fits the vehicle file when its correlation exceeds this per axis.
   double pattern_correlation_ok = 0.4;
+  // The rotor moments may turn at most this far (deg) about z from the rotor positions' pattern:
+  // the mistakes come in steps of 45 deg (a board mounted yawed, an X vehicle given as +); sims
+  // read below 1 deg, real Crazyflie flights up to 29.5 deg (jana01: full yaw turns with roll).
+  double imu_yaw_deg = 35.0;
   // A transposition of two rotors is named when it fits with at least this correlation (and by 0.5
   // better than the file's order).
   double swap_correlation = 0.8;
@@ -63,6 +74,19 @@ struct InputCheckThresholds {
 // The input checks of each flight (`raw[k]` is the flight `processed[k]` came from).
 std::vector<Check> CheckFlights(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
                                 const InputCheckThresholds& thresholds = {});
+
+// A multirotor's typical turn rate: real flights read a median |gyro| of 0.2-5 rad/s (Crazyflie,
+// Betaflight, INDIflight logs); a gyro in deg/s read as rad/s reads 57x that (error above 12 rad/s,
+// naming deg/s). Also run on the whole log before segmentation, which would otherwise leave most of
+// such a log out as "gyro limit" and the identification blame the excitation.
+Check CheckGyroRate(const FlightLog& log);
+
+// The time base of each flight: a sample rate too low for the low-pass cut-off `cutoff_hz` (the
+// filtered derivatives then bias kd and I_zz: sim A at 50 Hz with a 10 Hz cut-off -11 %, at 100 Hz
+// -5 %), and time stamps so large that a double no longer resolves them (a UNIX epoch: 2.4e-7 s at
+// 1.7e9 s, kd and I_zz -2.6 % at 200 Hz; a warning).
+std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::vector<ProcessedFlight>& processed,
+                                 double cutoff_hz);
 
 // Named parameter values with their std (std absent: not known) of one model.
 struct CheckedParameters {

@@ -9,6 +9,7 @@
 //
 // Relative paths are taken from the manifest's folder.
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
@@ -27,12 +28,16 @@ struct BatchEntry {
   // a scalar, several for a list; "true"/"false" for a flag).
   std::vector<std::pair<std::string, std::vector<std::string>>> options;
 
-  // What identifies the entry in an output line: log, vehicle and window.
+  // What identifies the entry in an output line: log, vehicle, window and options.
   std::string Key() const;
+  // The options as an output line holds them: {name: [values]}.
+  nlohmann::json OptionsJson() const;
 };
 
 // Throws rotorid::Error naming the manifest, line and column of what is wrong.
 std::vector<BatchEntry> ReadBatchManifest(const std::string& path);
+// The manifest `text` of the file `path` (relative paths are taken from its folder).
+std::vector<BatchEntry> ParseBatchManifest(const std::string& text, const std::string& path);
 
 struct BatchShard {
   int index = 1;  // 1-based
@@ -44,10 +49,16 @@ BatchShard ParseBatchShard(const std::string& text);
 // together cover every entry.
 std::vector<size_t> ShardEntries(size_t num_entries, const BatchShard& shard);
 
-// The key of one output line ({"log", "vehicle", "window"}), or nullopt for a line that does not
-// parse (e.g. cut short when a run was stopped).
+// The key of one output line ({"log", "vehicle", "window", "options"}), or nullopt for a line that
+// does not parse (e.g. cut short when a run was stopped).
 std::optional<std::string> BatchLineKey(const std::string& line);
-// Keys of the entries an existing output file already has (none when it does not exist).
-std::set<std::string> CompletedBatchEntries(const std::string& output_path);
+
+// What an existing output file holds (nothing when it does not exist).
+struct BatchOutput {
+  std::set<std::string> done;  // keys of its complete lines
+  std::string complete_lines;  // those lines, each with its newline
+  int broken_lines = 0;        // lines cut short (a run stopped, a full disk) or not an output line
+};
+BatchOutput ReadBatchOutput(const std::string& output_path);
 
 }  // namespace rotorid
