@@ -26,6 +26,8 @@ std::string ObservationOptions::Validate() const {
   if (!(filter.cutoff_hz > 0.0)) return "filter cut-off must be positive (Hz)";
   if (row_rate_hz < 0.0) return "row rate must be positive (Hz) or 0 for automatic";
   if (!(edge_trim_s >= 0.0)) return "edge trim must not be negative (s)";
+  // Samples are counted in int: a trim longer than any flight (or inf) would overflow them.
+  if (!(edge_trim_s <= 600.0)) return "edge trim must be at most 600 s (a trim longer than the flight leaves nothing)";
   return {};
 }
 

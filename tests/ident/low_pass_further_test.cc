@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "rotorid/core/error.h"
@@ -76,6 +77,25 @@ TEST(LowPassFurtherTest, RejectsACutOffAboveNyquist) {
   const ProcessedFlight flight = ProcessFlight(sim.log, sim.vehicle, 1.0, ObservationOptions{});
   EXPECT_THROW(LowPassFurther(flight, ButterworthOptions{4, FilterBand::kLowPass, 150.0, 0.0}, DataSource::kImu),
                Error);
+}
+
+}  // namespace
+}  // namespace rotorid
+
+namespace rotorid {
+namespace {
+
+// A library caller's edge trim beyond any flight (or inf) is refused by name, not counted into an int
+// (the CLI's --edge-trim-s 1e7 segfaulted before its range was checked at parse time).
+TEST(ObservationOptionsTest, AnEdgeTrimBeyondAnyFlightIsRefused) {
+  ObservationOptions options;
+  EXPECT_EQ(options.Validate(), "");
+  for (double trim : {1e7, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    options.edge_trim_s = trim;
+    EXPECT_NE(options.Validate().find("edge trim"), std::string::npos) << trim;
+  }
+  options.edge_trim_s = 600.0;
+  EXPECT_EQ(options.Validate(), "");
 }
 
 }  // namespace
