@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "report/html_text.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
@@ -16,31 +17,8 @@ std::string ExportNumber(const std::string& quantity, double x) {
   return buffer;
 }
 
-std::string XmlEscape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
+// The same five characters as the HTML report's (&#39; is XML's character reference for ').
+std::string XmlEscape(const std::string& text) { return Html(text); }
 
 std::string XmlComment(const std::string& text, int indent) {
   std::string body = text;  // a comment is not parsed for entities: only "--" must go
