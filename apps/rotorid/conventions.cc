@@ -40,6 +40,12 @@ std::string CheckOutputFile(const std::string& path) {
   return {};
 }
 
+// export's --out: a file, or the model directory of gz and gazebo-classic (written again in place).
+std::string CheckOutputFileOrFolder(const std::string& path) {
+  std::error_code ec;
+  return fs::is_directory(path, ec) ? std::string() : CheckOutputFile(path);
+}
+
 std::string CheckOutputFolder(const std::string& path) {
   if (path.empty()) return "a report folder name must not be empty";
   std::error_code ec;
@@ -110,7 +116,9 @@ void CheckOutputsAgainstInputs(const CLI::App& app) {
 void ApplyConventions(const std::vector<Command>& commands) {
   for (const Command& command : commands) {
     for (const char* name : kOutputFileOptions)
-      if (CLI::Option* option = command.app->get_option_no_throw(name)) option->check(CheckOutputFile);
+      if (CLI::Option* option = command.app->get_option_no_throw(name))
+        option->check(command.app->get_name() == "export" && std::string(name) == "--out" ? CheckOutputFileOrFolder
+                                                                                          : CheckOutputFile);
     if (CLI::Option* option = command.app->get_option_no_throw(kOutputFolderOption)) option->check(CheckOutputFolder);
     if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(ParsesWith(ParseEffectList));
     // Each thread or job takes memory (a refinement's Jacobian, a process): 1e6 exhausted it.

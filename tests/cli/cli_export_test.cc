@@ -183,6 +183,12 @@ TEST(CliExportTest, IdentifyReportWithDiscardedParameters) {
     EXPECT_EQ(r.exit_code, 0) << format << ": " << r.err;
   }
   EXPECT_NE(Slurp(dir + "/out.yaml").find("# value: B.I_zz = 0.05: given by the user"), std::string::npos);
+  // The model directory of gz is written again in place (a user re-exporting after a new flight).
+  const std::string before = Slurp(dir + "/out.gz/model.sdf");
+  ASSERT_FALSE(before.empty());
+  const auto again = run("gz", {"--set", "kd=5.1e-8", "--set", "I_zz=0.06"});
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(Slurp(dir + "/out.gz/model.sdf"), before);
 }
 
 // Real flights (skipped without ../shared/data/real): a Crazyflie identify report discards kd (refused
