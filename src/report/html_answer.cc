@@ -60,6 +60,9 @@ Model ModelOf(const ReportInput& input) {
                  std::nullopt};
       // A parameter the final model holds at 0 is one the flights do not fix.
       e.fixed = !(it->second == 0.0 && PositiveByPhysics(name));
+      if (const auto p = d.final_predicts_with.find(name);
+          !e.fixed && p != d.final_predicts_with.end() && p->second != 0.0)
+        e.predicted_with = p->second;
       return e;
     };
     return {"the diagnosis's final model", names, estimate, nullptr};
