@@ -286,35 +286,34 @@ std::pair<std::string, double> ParseExportSetting(const std::string& assignment)
   return {assignment.substr(0, eq), value};
 }
 
+namespace {
+
+// Every name --format takes, each format's own name first; v2's "gazebo" writes gazebo-classic.
+const std::pair<const char*, ExportFormat> kExportFormatNames[] = {{"gz", ExportFormat::kGz},
+                                                                   {"gazebo-classic", ExportFormat::kGazeboClassic},
+                                                                   {"px4", ExportFormat::kPx4},
+                                                                   {"px4-sih", ExportFormat::kPx4Sih},
+                                                                   {"ardupilot", ExportFormat::kArduPilot},
+                                                                   {"yaml", ExportFormat::kYaml},
+                                                                   {"gazebo", ExportFormat::kGazeboClassic}};
+
+}  // namespace
+
 std::vector<std::string> ExportFormatNames() {
-  return {"gz", "gazebo-classic", "px4", "px4-sih", "ardupilot", "yaml", "gazebo"};
+  std::vector<std::string> names;
+  for (const auto& [name, format] : kExportFormatNames) names.push_back(name);
+  return names;
 }
 
 ExportFormat ParseExportFormat(const std::string& name) {
-  if (name == "gz") return ExportFormat::kGz;
-  if (name == "gazebo-classic" || name == "gazebo") return ExportFormat::kGazeboClassic;
-  if (name == "px4") return ExportFormat::kPx4;
-  if (name == "px4-sih") return ExportFormat::kPx4Sih;
-  if (name == "ardupilot") return ExportFormat::kArduPilot;
-  if (name == "yaml") return ExportFormat::kYaml;
+  for (const auto& [known, format] : kExportFormatNames)
+    if (name == known) return format;
   throw Error("unknown export format '" + name + "' (" + Join(ExportFormatNames()) + ")");
 }
 
 const char* ExportFormatName(ExportFormat format) {
-  switch (format) {
-    case ExportFormat::kGz:
-      return "gz";
-    case ExportFormat::kGazeboClassic:
-      return "gazebo-classic";
-    case ExportFormat::kPx4:
-      return "px4";
-    case ExportFormat::kPx4Sih:
-      return "px4-sih";
-    case ExportFormat::kArduPilot:
-      return "ardupilot";
-    case ExportFormat::kYaml:
-      return "yaml";
-  }
+  for (const auto& [name, known] : kExportFormatNames)
+    if (format == known) return name;
   return "?";
 }
 
