@@ -24,6 +24,8 @@ using RunFunction = std::function<int()>;
 struct Command {
   CLI::App* app = nullptr;
   RunFunction run;
+  // --out may name an existing folder (export's model directories), else it must be a file.
+  bool out_may_be_folder = false;
 };
 
 // Options every analysing subcommand shares (INTERFACE.md section 4).

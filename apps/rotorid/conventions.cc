@@ -40,7 +40,8 @@ std::string CheckOutputFile(const std::string& path) {
   return {};
 }
 
-// export's --out: a file, or the model directory of gz and gazebo-classic (written again in place).
+// An --out that may also be an existing folder (Command::out_may_be_folder: export's model directories,
+// written again in place).
 std::string CheckOutputFileOrFolder(const std::string& path) {
   std::error_code ec;
   return fs::is_directory(path, ec) ? std::string() : CheckOutputFile(path);
@@ -117,8 +118,8 @@ void ApplyConventions(const std::vector<Command>& commands) {
   for (const Command& command : commands) {
     for (const char* name : kOutputFileOptions)
       if (CLI::Option* option = command.app->get_option_no_throw(name))
-        option->check(command.app->get_name() == "export" && std::string(name) == "--out" ? CheckOutputFileOrFolder
-                                                                                          : CheckOutputFile);
+        option->check(command.out_may_be_folder && std::string(name) == "--out" ? CheckOutputFileOrFolder
+                                                                                : CheckOutputFile);
     if (CLI::Option* option = command.app->get_option_no_throw(kOutputFolderOption)) option->check(CheckOutputFolder);
     if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(ParsesWith(ParseEffectList));
     // Each thread or job takes memory (a refinement's Jacobian, a process): 1e6 exhausted it.

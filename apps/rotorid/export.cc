@@ -19,6 +19,7 @@ Command AddExportCommand(CLI::App& root) {
   };
   auto options = std::make_shared<Options>();
   Command command;
+  command.out_may_be_folder = true;
   command.app = root.add_subcommand(
       "export",
       "writes an identified model for simulators (never a non-physical one): gz or gazebo-classic (a model directory), "
