@@ -160,8 +160,6 @@ void ApplyConventions(const std::vector<Command>& commands);
 // of the command's input files (the same file, also through a hard link or a symlink) or another
 // output. Throws UsageError naming both options.
 void CheckOutputsAgainstInputs(const CLI::App& app);
-// Whether two paths name the same file (device and inode when both exist, else the same path).
-bool SameFile(const std::string& a, const std::string& b);
 // "run 'rotorid SUB --help' for its options", for the subcommand on the command line.
 std::string UsageHint(const CLI::App& root, int argc, char** argv);
 // Non-empty when argv names no known subcommand: what to tell the user.

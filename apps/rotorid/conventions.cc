@@ -1,21 +1,16 @@
 // The conventions every subcommand follows (docs/cli.md): output paths checked while parsing
 // (before any work), effect lists checked while parsing, --config, and the usage-error message.
 
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <filesystem>
 #include <utility>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
+#include "rotorid/io/output_path.h"
 #include "rotorid/model/effects.h"
 
 namespace rotorid::cli {
 
 namespace {
-
-namespace fs = std::filesystem;
 
 // The options naming a file the command writes, and the folder --report writes into.
 constexpr const char* kOutputFileOptions[] = {"--json", "--out", "--truth", "--vehicle-out"};
@@ -25,34 +20,6 @@ constexpr const char* kOutputFolderOption = "--report";
 constexpr const char* kInputFileOptions[] = {"--vehicle", "--log",        "--validate-vehicle", "--validate-log",
                                              "--params",  "--column-map", "--manifest"};
 constexpr int kMaxThreads = 256;
-
-std::string CheckOutputFile(const std::string& path) {
-  if (path.empty()) return "an output file name must not be empty";
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) return "'" + path + "' is a folder, not a file";
-  // Outputs are renamed into place: a device, FIFO or socket would be replaced, after all the work.
-  if (fs::exists(path, ec) && !fs::is_regular_file(path, ec))
-    return "'" + path + "' exists and is not a regular file (a device, FIFO or socket): give the path of a file";
-  const fs::path parent = fs::path(path).parent_path();
-  const std::string folder = parent.empty() ? "." : parent.string();
-  if (!fs::is_directory(folder, ec)) return "folder '" + folder + "' of '" + path + "' does not exist";
-  if (::access(folder.c_str(), W_OK) != 0) return "folder '" + folder + "' of '" + path + "' is not writable";
-  return {};
-}
-
-// An --out that may also be an existing folder (Command::out_may_be_folder: export's model directories,
-// written again in place).
-std::string CheckOutputFileOrFolder(const std::string& path) {
-  std::error_code ec;
-  return fs::is_directory(path, ec) ? std::string() : CheckOutputFile(path);
-}
-
-std::string CheckOutputFolder(const std::string& path) {
-  if (path.empty()) return "a report folder name must not be empty";
-  std::error_code ec;
-  if (fs::exists(path, ec) && !fs::is_directory(path, ec)) return "'" + path + "' exists and is not a folder";
-  return {};
-}
 
 bool IsOutputOption(const std::string& name) {
   for (const char* output : kOutputFileOptions)
@@ -89,16 +56,6 @@ std::string Quoted(const std::pair<std::string, std::string>& option) {
 
 }  // namespace
 
-bool SameFile(const std::string& a, const std::string& b) {
-  struct stat sa {};
-  struct stat sb {};
-  if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0)
-    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-  std::error_code ec_a, ec_b;
-  const fs::path ca = fs::weakly_canonical(a, ec_a), cb = fs::weakly_canonical(b, ec_b);
-  return !ec_a && !ec_b && ca == cb;
-}
-
 void CheckOutputsAgainstInputs(const CLI::App& app) {
   const auto outputs = GivenPaths(app, /*outputs=*/true);
   const auto inputs = GivenPaths(app, /*outputs=*/false);
@@ -118,9 +75,9 @@ void ApplyConventions(const std::vector<Command>& commands) {
   for (const Command& command : commands) {
     for (const char* name : kOutputFileOptions)
       if (CLI::Option* option = command.app->get_option_no_throw(name))
-        option->check(command.out_may_be_folder && std::string(name) == "--out" ? CheckOutputFileOrFolder
-                                                                                : CheckOutputFile);
-    if (CLI::Option* option = command.app->get_option_no_throw(kOutputFolderOption)) option->check(CheckOutputFolder);
+        option->check(command.out_may_be_folder && std::string(name) == "--out" ? OutputFileOrFolderProblem
+                                                                                : OutputFileProblem);
+    if (CLI::Option* option = command.app->get_option_no_throw(kOutputFolderOption)) option->check(OutputFolderProblem);
     if (CLI::Option* option = command.app->get_option_no_throw("--effects")) option->check(ParsesWith(ParseEffectList));
     // Each thread or job takes memory (a refinement's Jacobian, a process): 1e6 exhausted it.
     for (const char* name : {"--threads", "--jobs"})
