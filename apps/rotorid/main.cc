@@ -6,8 +6,8 @@
 #include <iostream>
 
 #include "commands.h"
-#include "heap.h"
 #include "rotorid/core/error.h"
+#include "rotorid/core/heap.h"
 #include "rotorid/core/text.h"
 
 namespace {
@@ -20,7 +20,7 @@ int UsageFailure(const std::string& message, const std::string& hint) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  rotorid::cli::PrepareHeapForLargeArrays();
+  rotorid::PrepareHeapForLargeArrays();
   google::InitGoogleLogging(argv[0]);
   FLAGS_logtostderr = true;
   // Library (Ceres, glog) lines reach the console only under --verbose.

@@ -1,4 +1,4 @@
-#include "heap.h"
+#include "rotorid/core/heap.h"
 
 #include <cstdlib>  // defines __GLIBC__ with glibc
 
@@ -19,7 +19,7 @@
 #include <limits>
 #endif
 
-namespace rotorid::cli {
+namespace rotorid {
 
 #ifdef ROTORID_TUNE_GLIBC_HEAP
 namespace {
@@ -69,4 +69,4 @@ void PrepareHeapForLargeArrays() {
 void PrepareHeapForLargeArrays() {}
 #endif
 
-}  // namespace rotorid::cli
+}  // namespace rotorid
