@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/heap.h"
+#include "rotorid/core/interrupt.h"
 #include "rotorid/core/text.h"
 
 namespace {
@@ -21,6 +22,8 @@ int UsageFailure(const std::string& message, const std::string& hint) {
 
 int main(int argc, char** argv) {
   rotorid::PrepareHeapForLargeArrays();
+  // Before any thread starts: Ctrl-C and SIGTERM remove the run's temporary files (exit 130, 143).
+  rotorid::InstallInterruptCleanup();
   google::InitGoogleLogging(argv[0]);
   FLAGS_logtostderr = true;
   // Library (Ceres, glog) lines reach the console only under --verbose.

@@ -7,8 +7,10 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <utility>
 
 #include "rotorid/core/error.h"
+#include "rotorid/core/interrupt.h"
 
 namespace rotorid {
 
@@ -21,6 +23,27 @@ std::string ParentFolder(const std::string& path) {
   return slash == 0 ? "/" : path.substr(0, slash);
 }
 
+// The temporary file beside an output, registered for the Ctrl-C cleanup from its creation, and
+// removed unless it was renamed into place.
+struct TemporaryFile {
+  explicit TemporaryFile(const std::string& output) : path(output + ".tmp.XXXXXX") {
+    const InterruptDeferral registered_once_created;
+    fd = mkstemp(path.data());
+    if (fd < 0) throw Error(output + ": cannot create a temporary file beside it: " + std::strerror(errno));
+    RegisterTemporaryPath(path);
+  }
+  ~TemporaryFile() {
+    if (fd >= 0) ::close(fd);
+    if (!renamed) std::remove(path.c_str());
+    UnregisterTemporaryPath(path);
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  std::string path;
+  int fd = -1;
+  bool renamed = false;
+};
+
 }  // namespace
 
 void WriteFileAtomically(const std::string& path, const std::string& content) {
@@ -31,30 +54,24 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
     throw Error(path +
                 ": exists and is not a regular file (a folder, device, FIFO or socket); rotorid replaces only "
                 "regular files: give the path of a file");
-  std::string tmp = path + ".tmp.XXXXXX";
-  const int fd = mkstemp(tmp.data());
-  if (fd < 0) throw Error(path + ": cannot create a temporary file beside it: " + std::strerror(errno));
+  TemporaryFile tmp(path);
   size_t written = 0;
   while (written < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    const ssize_t n = ::write(tmp.fd, content.data() + written, content.size() - written);
     if (n < 0) {
       if (errno == EINTR) continue;
-      const std::string reason = std::strerror(errno);
-      ::close(fd);
-      std::remove(tmp.c_str());
-      throw Error(path + ": write failed: " + reason);
+      throw Error(path + ": write failed: " + std::strerror(errno));
     }
     written += static_cast<size_t>(n);
   }
   // mkstemp creates 0600; outputs are ordinary user files.
-  fchmod(fd, 0644);
+  fchmod(tmp.fd, 0644);
   // The content reaches the disk before the rename makes it visible: after a crash, the old file or
   // the whole new one, never an empty or partial one.
-  if (::fsync(fd) != 0 || ::close(fd) != 0 || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw Error(path + ": cannot write: " + reason);
-  }
+  const bool on_disk = ::fsync(tmp.fd) == 0 && ::close(std::exchange(tmp.fd, -1)) == 0;
+  if (!on_disk || std::rename(tmp.path.c_str(), path.c_str()) != 0)
+    throw Error(path + ": cannot write: " + std::strerror(errno));
+  tmp.renamed = true;
   // And the rename itself (best effort: some file systems refuse to sync a folder).
   const int folder = ::open(ParentFolder(path).c_str(), O_RDONLY | O_DIRECTORY);
   if (folder >= 0) {

@@ -1,25 +1,19 @@
 #include "report/gnuplot.h"
 
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <chrono>
-#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <thread>
 #include <vector>
 
 #include "rotorid/core/error.h"
-
-extern char** environ;
+#include "rotorid/core/interrupt.h"
+#include "rotorid/core/process.h"
 
 namespace rotorid::internal {
 
@@ -79,40 +73,20 @@ std::string GnuplotPath(const std::string& path) {
 ProcessResult RunGnuplotScript(const std::string& executable, const std::string& script_path,
                                const std::string& stderr_path, double timeout_s) {
   ProcessResult result;
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-  std::string arg0 = "gnuplot", arg1 = "--default-settings", arg2 = script_path;
-  std::vector<char*> argv = {arg0.data(), arg1.data(), arg2.data(), nullptr};
-  pid_t pid = 0;
-  const int spawn_error = posix_spawn(&pid, executable.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawn_error != 0) {
-    result.error_text = "cannot start " + executable + ": " + std::strerror(spawn_error);
+  ChildProcess child;
+  child.executable = executable;
+  child.argv = {"gnuplot", "--default-settings", script_path};
+  child.stderr_path = stderr_path;
+  child.timeout_s = timeout_s;
+  try {
+    const ChildExit exit = RunChildProcess(child);
+    result.exit_code = exit.exit_code;
+    result.timed_out = exit.timed_out;
+  } catch (const Error& e) {
+    result.error_text = e.what();
     return result;
   }
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  int status = 0;
-  for (;;) {
-    const pid_t done = ::waitpid(pid, &status, WNOHANG);
-    if (done == pid) break;
-    if (done < 0 && errno != EINTR) {
-      result.error_text = std::string("waiting for gnuplot failed: ") + std::strerror(errno);
-      return result;
-    }
-    if (std::chrono::steady_clock::now() > deadline) {
-      ::kill(pid, SIGKILL);
-      while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-      }
-      result.timed_out = true;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  result.ok = !result.timed_out && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  result.ok = !result.timed_out && result.exit_code == 0;
   if (!result.ok) {
     result.error_text = Tail(stderr_path, 400);
     if (result.timed_out)
@@ -129,14 +103,17 @@ TempDir::TempDir(const std::string& prefix) {
   std::filesystem::path base = std::filesystem::temp_directory_path(ec);
   if (ec) base = "/tmp";
   std::string pattern = (base / (prefix + "-XXXXXX")).string();
+  const InterruptDeferral registered_once_created;
   if (!::mkdtemp(pattern.data()))
     throw Error("cannot create a temporary directory in " + base.string() + ": " + std::strerror(errno));
   path_ = pattern;
+  RegisterTemporaryPath(path_);
 }
 
 TempDir::~TempDir() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
+  UnregisterTemporaryPath(path_);
 }
 
 }  // namespace rotorid::internal
