@@ -1,7 +1,8 @@
 // The conventions every subcommand follows (docs/cli.md): output paths checked while parsing
-// (before any work), effect lists checked while parsing, --config, and the usage-error message.
+// (before any work), effect lists and thread counts checked while parsing.
 
-#include <utility>
+#include <algorithm>
+#include <iterator>
 
 #include "commands.h"
 #include "rotorid/core/error.h"
@@ -21,26 +22,20 @@ constexpr const char* kInputFileOptions[] = {"--vehicle", "--log",        "--val
                                              "--params",  "--column-map", "--manifest"};
 constexpr int kMaxThreads = 256;
 
-bool IsOutputOption(const std::string& name) {
-  for (const char* output : kOutputFileOptions)
-    if (name == output) return true;
-  return name == kOutputFolderOption;
-}
-
-bool IsInputOption(const std::string& name) {
-  for (const char* input : kInputFileOptions)
-    if (name == input) return true;
-  return false;
+template <size_t N>
+bool OneOf(const std::string& name, const char* const (&names)[N]) {
+  return std::find(std::begin(names), std::end(names), name) != std::end(names);
 }
 
 // Every (option, value) of `app` that names an output (or an input file, with the --config file of
 // its parents).
-std::vector<std::pair<std::string, std::string>> GivenPaths(const CLI::App& app, bool outputs) {
-  std::vector<std::pair<std::string, std::string>> paths;
+std::vector<OptionPath> GivenPaths(const CLI::App& app, bool outputs) {
+  std::vector<OptionPath> paths;
   for (const CLI::Option* option : app.get_options()) {
     if (option->count() == 0) continue;
     const std::string name = option->get_name();
-    if (!(outputs ? IsOutputOption(name) : IsInputOption(name))) continue;
+    if (!(outputs ? OneOf(name, kOutputFileOptions) || name == kOutputFolderOption : OneOf(name, kInputFileOptions)))
+      continue;
     for (const std::string& value : option->results()) paths.emplace_back(name, value);
   }
   if (!outputs)
@@ -50,25 +45,11 @@ std::vector<std::pair<std::string, std::string>> GivenPaths(const CLI::App& app,
   return paths;
 }
 
-std::string Quoted(const std::pair<std::string, std::string>& option) {
-  return option.first + " '" + option.second + "'";
-}
-
 }  // namespace
 
 void CheckOutputsAgainstInputs(const CLI::App& app) {
-  const auto outputs = GivenPaths(app, /*outputs=*/true);
-  const auto inputs = GivenPaths(app, /*outputs=*/false);
-  for (size_t i = 0; i < outputs.size(); ++i) {
-    for (const auto& input : inputs)
-      if (SameFile(outputs[i].second, input.second))
-        throw UsageError(Quoted(outputs[i]) + " is the input " + Quoted(input) +
-                         " (the same file): writing it would destroy the input; give another output path");
-    for (size_t j = i + 1; j < outputs.size(); ++j)
-      if (SameFile(outputs[i].second, outputs[j].second))
-        throw UsageError(Quoted(outputs[i]) + " and " + Quoted(outputs[j]) +
-                         " name the same file: one output would replace the other");
-  }
+  const std::string problem = OutputsAgainstInputsProblem(GivenPaths(app, /*outputs=*/true), GivenPaths(app, false));
+  if (!problem.empty()) throw UsageError(problem);
 }
 
 void ApplyConventions(const std::vector<Command>& commands) {
@@ -83,25 +64,6 @@ void ApplyConventions(const std::vector<Command>& commands) {
     for (const char* name : {"--threads", "--jobs"})
       if (CLI::Option* option = command.app->get_option_no_throw(name)) option->check(Within(1, kMaxThreads));
   }
-}
-
-std::string UsageHint(const CLI::App& root, int argc, char** argv) {
-  for (int i = 1; i < argc; ++i) {
-    for (const CLI::App* sub : root.get_subcommands({}))
-      if (sub->get_name() == argv[i]) return "run 'rotorid " + sub->get_name() + " --help' for its options";
-  }
-  return "run 'rotorid --help' for the subcommands";
-}
-
-std::string UnknownSubcommand(const CLI::App& root, int argc, char** argv) {
-  std::string names;
-  for (const CLI::App* sub : root.get_subcommands({})) names += (names.empty() ? "" : ", ") + sub->get_name();
-  if (argc < 2) return "a subcommand is required: " + names;
-  const std::string first = argv[1];
-  if (!first.empty() && first[0] == '-') return {};
-  for (const CLI::App* sub : root.get_subcommands({}))
-    if (sub->get_name() == first) return {};
-  return "unknown subcommand '" + first + "'; the subcommands are " + names;
 }
 
 }  // namespace rotorid::cli

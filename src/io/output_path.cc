@@ -45,4 +45,24 @@ bool SameFile(const std::string& a, const std::string& b) {
   return !ec_a && !ec_b && ca == cb;
 }
 
+namespace {
+
+std::string Quoted(const OptionPath& option) { return option.first + " '" + option.second + "'"; }
+
+}  // namespace
+
+std::string OutputsAgainstInputsProblem(const std::vector<OptionPath>& outputs, const std::vector<OptionPath>& inputs) {
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    for (const OptionPath& input : inputs)
+      if (SameFile(outputs[i].second, input.second))
+        return Quoted(outputs[i]) + " is the input " + Quoted(input) +
+               " (the same file): writing it would destroy the input; give another output path";
+    for (size_t j = i + 1; j < outputs.size(); ++j)
+      if (SameFile(outputs[i].second, outputs[j].second))
+        return Quoted(outputs[i]) + " and " + Quoted(outputs[j]) +
+               " name the same file: one output would replace the other";
+  }
+  return {};
+}
+
 }  // namespace rotorid
