@@ -68,8 +68,8 @@ nlohmann::json RunEntry(const BatchCommandOptions& options, const BatchEntry& en
   const int exit_code = RunChildProcess(child).exit_code;
   // Not a result of the entry: recorded, it would be skipped when the run is resumed.
   if (IsInterruptExitCode(exit_code))
-    throw Error("batch: the entry of " + entry.log + " was interrupted (exit code " + std::to_string(exit_code) +
-                "); run again to resume");
+    throw Error("batch: the entry of " + entry.log + " with " + entry.vehicle + " was interrupted (exit code " +
+                std::to_string(exit_code) + "); run again to resume");
   nlohmann::json line = {
       {"log", entry.log},
       {"vehicle", entry.vehicle},
