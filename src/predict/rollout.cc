@@ -175,6 +175,16 @@ SimState LoggedState(const LoggedStates& states, int k) {
   return state;
 }
 
+}  // namespace
+
+Eigen::Vector3d TorqueOfAngularAcceleration(const VehicleParameters& parameters, const Eigen::Vector3d& b) {
+  // [m 1, -[ms x]; [ms x], I] [ds; b] = [0; tau]: ds = [ms x] b / m, tau = (I + [ms x]^2 / m) b.
+  const Eigen::Matrix3d ms = Skew<double>(parameters.body.first_moment);
+  return (parameters.body.inertia + ms * ms / parameters.mass_kg) * b;
+}
+
+namespace {
+
 // One rollout of N steps from grid sample `start`, its errors and the naive predictor's added.
 void AddWindow(const LoggedStates& states, const MultirotorDynamics& dynamics,
                const MultirotorDynamics::RotorCommand& command, int start, int horizon, ErrorSums* sums) {
@@ -219,9 +229,8 @@ class TorqueBiasObserver {
     }
   }
 
-  // The body-frame torque about O_d whose angular acceleration (the force unchanged) is the
-  // least-squares slope of r over samples first..last: with the first moment, [m 1, -[ms x]; [ms x], I]
-  // [s'; b] = [0; tau] gives tau = (I + [ms x]^2 / m) b.
+  // The body-frame torque about O_d whose angular acceleration is the least-squares slope of r over
+  // samples first..last.
   Eigen::Vector3d Torque(int first, int last, double dt_s) const {
     const int n = last - first + 1;
     const double mean_j = 0.5 * (first + last);
@@ -232,9 +241,7 @@ class TorqueBiasObserver {
       cross += (j - mean_j) * (residual_.row(j).transpose() - mean_r);
       spread += (j - mean_j) * (j - mean_j);
     }
-    const Eigen::Vector3d slope = cross / (spread * dt_s);
-    const Eigen::Matrix3d ms = Skew<double>(parameters_.body.first_moment);
-    return (parameters_.body.inertia + ms * ms / parameters_.mass_kg) * slope;
+    return TorqueOfAngularAcceleration(parameters_, cross / (spread * dt_s));
   }
 
  private:

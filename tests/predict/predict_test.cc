@@ -8,11 +8,13 @@
 
 #include <fstream>
 
+#include "predict/rollout.h"
 #include "rotorid/core/error.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/io/vehicle_yaml.h"
 #include "rotorid/predict/diagnosis_prediction.h"
 #include "rotorid/report/json.h"
+#include "rotorid/sim/dynamics.h"
 #include "rotorid/sim/presets.h"
 #include "rotorid/sim/simulator.h"
 #include "rotorid/sim/truth.h"
@@ -242,6 +244,31 @@ TEST(PredictTest, TorqueBiasObserverTakesOutAMovedCentreOfMass) {
   EXPECT_LT(Mae(t, kAngularVelocity, 50), 0.1 * Mae(open_loop, kAngularVelocity, 50));
   truth.torque_bias_window_s = -1.0;
   EXPECT_NE(truth.Validate().find("--torque-bias-window"), std::string::npos);
+}
+
+// The observer's torque, through the simulator's physics (ExternalForce::body_torque_nm), adds
+// exactly the angular acceleration it was computed for, with the first moment's coupling.
+TEST(PredictTest, ObservedTorqueAddsItsAngularAcceleration) {
+  const SimulationVehicle a = PresetVehicle("A");
+  SimState state;
+  state.angular_velocity_b_radps = Eigen::Vector3d(0.3, -0.2, 0.5);
+  state.attitude_wb = Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 2, 3).normalized()));
+  const Eigen::VectorXd rotors = Eigen::VectorXd::Constant(a.vehicle.num_rotors(), 600.0);
+  const MultirotorDynamics plain(a.vehicle, a.parameters, 9.81, 0.0);
+  const Eigen::Vector3d b(1.5, -2.0, 0.7);
+  ExternalForce torque;
+  torque.body_torque_nm = internal::TorqueOfAngularAcceleration(a.parameters, b);
+  const MultirotorDynamics biased(a.vehicle, a.parameters, 9.81, 0.0, {}, torque);
+  const BodyAcceleration before = plain.Accelerations(0.0, state, rotors);
+  const BodyAcceleration after = biased.Accelerations(0.0, state, rotors);
+  EXPECT_LT((after.angular_acceleration_b_radps2 - before.angular_acceleration_b_radps2 - b).norm(), 1e-12);
+  // I b alone would be off by the first moment's share (A: ms = (-4, -2, -6) mm kg).
+  torque.body_torque_nm = a.parameters.body.inertia * b;
+  const MultirotorDynamics naive(a.vehicle, a.parameters, 9.81, 0.0, {}, torque);
+  EXPECT_GT(
+      (naive.Accelerations(0.0, state, rotors).angular_acceleration_b_radps2 - before.angular_acceleration_b_radps2 - b)
+          .norm(),
+      1e-4);
 }
 
 TEST(PredictTest, OptionsAndOverridesAreValidated) {
