@@ -45,6 +45,9 @@ Command AddPredictCommand(CLI::App& root) {
       ->check(CLI::IsMember({"linear", "refined"}));
   app->add_option("--set", o->overrides, "NAME=VALUE: fly with this report parameter replaced (repeatable)")
       ->check(ParsesWith(ParseParameterOverride));
+  app->add_option("--torque-bias-window", p.torque_bias_window_s,
+                  "seconds before each start over which a torque bias is observed (0: open loop)")
+      ->capture_default_str();
   app->add_option("--threads", p.threads, "threads (0: every core)")->capture_default_str();
   app->add_option("--json", o->json_path, "write the machine-readable report to this file");
   app->add_option("--report", o->report_dir, "write predict.html (MAE against h, tables) into this folder");

@@ -55,6 +55,8 @@ std::string PredictOptions::Validate() const {
   if (stride < 1) return "--stride must be at least 1, got " + std::to_string(stride);
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return "--dt must be a positive number of seconds";
   if (!(ground_clearance_m >= 0.0) || !(airborne_thrust_share >= 0.0)) return "the ground-contact rule must be >= 0";
+  if (!(torque_bias_window_s >= 0.0) || !std::isfinite(torque_bias_window_s))
+    return "--torque-bias-window must be a number of seconds >= 0";
   if (threads < 0) return "threads must be >= 0";
   return source.Validate();
 }

@@ -95,7 +95,11 @@ std::string PredictHtml(const PredictResult& result) {
       Html(result.block) + " model of <code>" + Html(o.params_path) + "</code> flown open loop over " +
       std::to_string(o.horizon_steps) + " steps of " + General(o.dt_s) + " s from " +
       std::to_string(result.pooled.windows) + " logged states (" + PredictionScopeName(o.scope) +
-      " scope), against the naive predictor x(t+h) = x(t) on the same windows. Green: below naive.</p>\n";
+      " scope), against the naive predictor x(t+h) = x(t) on the same windows. Green: below naive." +
+      (o.torque_bias_window_s > 0.0 ? " Each window carries a constant body-frame torque bias observed over the " +
+                                          General(o.torque_bias_window_s) + " s of the log before its start."
+                                    : "") +
+      "</p>\n";
   for (const Check& c : result.checks)
     if (c.status != CheckStatus::kOk)
       html += "<p class=\"bad\">check " + Html(c.name) + ": " + Html(c.message) + "</p>\n";

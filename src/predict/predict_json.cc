@@ -62,6 +62,7 @@ nlohmann::json PredictJson(const PredictResult& result) {
                              {"scope", PredictionScopeName(o.scope)},
                              {"segment", o.segment == SegmentMode::kAuto ? "auto" : "none"},
                              {"rotor_signal", o.source.rotor_signal},
+                             {"torque_bias_window_s", o.torque_bias_window_s},
                              {"parameter_overrides", o.parameter_overrides}};
   nlohmann::json prediction = {{"horizon_steps", o.horizon_steps},
                                {"dt_s", o.dt_s},
@@ -88,8 +89,11 @@ std::string PredictBriefReport(const PredictResult& result) {
   const PredictOptions& o = result.options;
   const std::vector<int> steps = PredictionSummarySteps(o.horizon_steps);
   std::string text = "rotorid predict: " + result.block + " model of " + o.params_path + ", " +
-                     std::to_string(result.pooled.windows) + " windows (" + PredictionScopeName(o.scope) +
-                     ")\nMAE model / naive at h =";
+                     std::to_string(result.pooled.windows) + " windows (" + PredictionScopeName(o.scope) + ")" +
+                     (o.torque_bias_window_s > 0.0 ? ", torque bias observed over " +
+                                                         ShortNumber(o.torque_bias_window_s) + " s before each start"
+                                                   : "") +
+                     "\nMAE model / naive at h =";
   for (int h : steps) text += " " + std::to_string(h);
   text += " steps\n";
   for (int g = 0; g < kNumPredictionGroups; ++g) {

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <thread>
 
 #include "core/parallel_for.h"
 #include "rotorid/core/error.h"
 #include "rotorid/model/physical_consistency.h"
+#include "rotorid/model/rigid_body.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/refine/effect_model.h"
 #include "rotorid/signal/differentiate.h"
@@ -163,14 +165,30 @@ PredictionCurves ErrorSums::Mean() const {
 
 namespace {
 
+// The logged state at grid sample k.
+SimState LoggedState(const LoggedStates& states, int k) {
+  SimState state;
+  state.position_w_m = states.position_w_m.row(k).transpose();
+  state.velocity_w_mps = states.velocity_w_mps.row(k).transpose();
+  state.attitude_wb = states.attitude_wb[k];
+  state.angular_velocity_b_radps = states.angular_velocity_b_radps.row(k).transpose();
+  return state;
+}
+
+}  // namespace
+
+Eigen::Vector3d TorqueOfAngularAcceleration(const VehicleParameters& parameters, const Eigen::Vector3d& b) {
+  // [m 1, -[ms x]; [ms x], I] [ds; b] = [0; tau]: ds = [ms x] b / m, tau = (I + [ms x]^2 / m) b.
+  const Eigen::Matrix3d ms = Skew<double>(parameters.body.first_moment);
+  return (parameters.body.inertia + ms * ms / parameters.mass_kg) * b;
+}
+
+namespace {
+
 // One rollout of N steps from grid sample `start`, its errors and the naive predictor's added.
 void AddWindow(const LoggedStates& states, const MultirotorDynamics& dynamics,
                const MultirotorDynamics::RotorCommand& command, int start, int horizon, ErrorSums* sums) {
-  SimState state;
-  state.position_w_m = states.position_w_m.row(start).transpose();
-  state.velocity_w_mps = states.velocity_w_mps.row(start).transpose();
-  state.attitude_wb = states.attitude_wb[start];
-  state.angular_velocity_b_radps = states.angular_velocity_b_radps.row(start).transpose();
+  SimState state = LoggedState(states, start);
   for (int h = 1; h <= horizon; ++h) {
     const int k = start + h;
     state = dynamics.Step(states.t_s[k - 1], state, states.dt_s, command);
@@ -189,6 +207,48 @@ void AddWindow(const LoggedStates& states, const MultirotorDynamics& dynamics,
     if (!sums->model[g].empty()) sums->windows[g] += 1;
 }
 
+// The torque bias observer (PredictOptions::torque_bias_window_s). What the model leaves out of the
+// angular velocity up to grid sample k: r_k = w_k - integral of the model's w' at the logged states
+// (trapezoid). Over a window's past, r grows with the slope of the missing angular acceleration.
+class TorqueBiasObserver {
+ public:
+  TorqueBiasObserver(const LoggedStates& states, const MultirotorDynamics& dynamics,
+                     const MultirotorDynamics::RotorCommand& command)
+      : residual_(states.size(), 3), parameters_(dynamics.parameters()) {
+    Eigen::Vector3d previous = Eigen::Vector3d::Zero(), integral = Eigen::Vector3d::Zero();
+    for (int k = 0; k < states.size(); ++k) {
+      const SimState state = LoggedState(states, k);
+      const double t = states.t_s[k];
+      const Eigen::Vector3d acc = dynamics
+                                      .Accelerations(t, state, dynamics.ActingRotorSpeeds(t, state, command),
+                                                     dynamics.ActingRotorRates(t, state, command))
+                                      .angular_acceleration_b_radps2;
+      if (k > 0) integral += 0.5 * (previous + acc) * states.dt_s;
+      previous = acc;
+      residual_.row(k) = states.angular_velocity_b_radps.row(k) - integral.transpose();
+    }
+  }
+
+  // The body-frame torque about O_d whose angular acceleration is the least-squares slope of r over
+  // samples first..last.
+  Eigen::Vector3d Torque(int first, int last, double dt_s) const {
+    const int n = last - first + 1;
+    const double mean_j = 0.5 * (first + last);
+    Eigen::Vector3d mean_r = residual_.middleRows(first, n).colwise().mean().transpose();
+    Eigen::Vector3d cross = Eigen::Vector3d::Zero();
+    double spread = 0.0;
+    for (int j = first; j <= last; ++j) {
+      cross += (j - mean_j) * (residual_.row(j).transpose() - mean_r);
+      spread += (j - mean_j) * (j - mean_j);
+    }
+    return TorqueOfAngularAcceleration(parameters_, cross / (spread * dt_s));
+  }
+
+ private:
+  Eigen::MatrixX3d residual_;
+  VehicleParameters parameters_;
+};
+
 }  // namespace
 
 ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const FlownModel& model,
@@ -206,12 +266,14 @@ ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const 
                   ")");
     }
   }();
-  // Start instants whose whole window k..k+N is in the scope (no grounded sample in it).
+  // Start instants whose whole window k..k+N, and the observer's past k-L..k, is in the scope (no
+  // grounded sample in it).
+  const int past = static_cast<int>(std::lround(options.torque_bias_window_s / states.dt_s));
   std::vector<int> grounded_before(states.size() + 1, 0);
   for (int k = 0; k < states.size(); ++k) grounded_before[k + 1] = grounded_before[k] + (states.airborne[k] ? 0 : 1);
   std::vector<int> starts;
-  for (int k = 0; k + horizon < states.size(); k += options.stride)
-    if (grounded_before[k + horizon + 1] == grounded_before[k]) starts.push_back(k);
+  for (int k = past; k + horizon < states.size(); k += options.stride)
+    if (grounded_before[k + horizon + 1] == grounded_before[k - past]) starts.push_back(k);
   const double t0 = states.t_s.size() > 0 ? states.t_s[0] : 0.0;
   const Eigen::MatrixXd& rotor = states.rotor_speed_radps;
   const int last = states.size() - 1;
@@ -226,9 +288,20 @@ ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const 
       options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int chunks = std::min<int>(static_cast<int>(starts.size()), 8 * threads);
   std::vector<ErrorSums> partial(std::max(chunks, 0), ErrorSums(horizon, states.has_pose));
+  const std::optional<TorqueBiasObserver> observer =
+      past > 0 ? std::optional<TorqueBiasObserver>(std::in_place, states, dynamics, command) : std::nullopt;
   ParallelFor(chunks, threads, [&](int c) {
-    for (size_t s = static_cast<size_t>(c); s < starts.size(); s += static_cast<size_t>(chunks))
-      AddWindow(states, dynamics, command, starts[s], horizon, &partial[c]);
+    for (size_t s = static_cast<size_t>(c); s < starts.size(); s += static_cast<size_t>(chunks)) {
+      if (!observer) {
+        AddWindow(states, dynamics, command, starts[s], horizon, &partial[c]);
+        continue;
+      }
+      ExternalForce bias;
+      bias.body_torque_nm = observer->Torque(starts[s] - past, starts[s], states.dt_s);
+      const MultirotorDynamics biased(vehicle, model.parameters, states.gravity_mps2, 0.0,
+                                      ActingEffects(model.effects, EffectStage::kRotorWrench), bias);
+      AddWindow(states, biased, command, starts[s], horizon, &partial[c]);
+    }
   });
   ErrorSums total(horizon, states.has_pose);
   for (const ErrorSums& p : partial) total.Add(p);

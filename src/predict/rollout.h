@@ -53,6 +53,10 @@ struct LoggedStates {
 LoggedStates ReadLoggedStates(const FlightLog& log, const Vehicle& vehicle, const FlownModel& model,
                               const ObservationOptions& observation, const PredictOptions& options);
 
+// The body-frame torque about O_d that adds the angular acceleration b to the body of `parameters`
+// and leaves the force unchanged (with a first moment it is not I b).
+Eigen::Vector3d TorqueOfAngularAcceleration(const VehicleParameters& parameters, const Eigen::Vector3d& b);
+
 // Sums of the errors over windows, per group and step ahead (index h - 1), and the number of
 // windows that verify each group.
 struct ErrorSums {

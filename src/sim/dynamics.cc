@@ -88,8 +88,10 @@ BodyAcceleration MultirotorDynamics::Accelerations(double t_s, const SimState& s
     }
     wrench = RotorWrench<double>(rotor_speed_radps, parameters_.rotor.kt, parameters_.rotor.kd, vehicle_, terms);
   }
-  if (external_force_.active())
+  if (external_force_.active()) {
     wrench.head<3>() += state.attitude_wb.normalized().conjugate() * external_force_.At(t_s);
+    wrench.tail<3>() += external_force_.body_torque_nm;
+  }
   BodyAcceleration acc;
   ForwardDynamics<double>(state.angular_velocity_b_radps, wrench, parameters_.mass_kg, parameters_.body.first_moment,
                           parameters_.body.inertia, &acc.specific_force_b_mps2, &acc.angular_acceleration_b_radps2);

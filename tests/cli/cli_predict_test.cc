@@ -123,12 +123,23 @@ TEST_F(CliPredictTest, AWindowCutsTheLog) {
   EXPECT_LE(r["prediction"]["windows"].get<int>(), 491);
   EXPECT_DOUBLE_EQ(r["input"]["flights"][0]["window_s"][0].get<double>(), 2.0);
   EXPECT_EQ(r["settings"]["segment"], "none");
+  EXPECT_EQ(r["settings"]["torque_bias_window_s"], 0.0);
+  // The observer needs its 0.3 s of past inside the window: 30 start instants fewer.
+  const nlohmann::json observed =
+      Predict({"--params", *dir_ + "/identify.json", "--log", *dir_ + "/pose.csv", "--window", "2,7", "--segment",
+               "none", "--horizon", "10", "--torque-bias-window", "0.3"},
+              &code);
+  EXPECT_EQ(observed["prediction"]["windows"].get<int>(), r["prediction"]["windows"].get<int>() - 30);
+  EXPECT_DOUBLE_EQ(observed["settings"]["torque_bias_window_s"].get<double>(), 0.3);
 }
 
 TEST_F(CliPredictTest, UsageErrors) {
   const std::string log = *dir_ + "/pose.csv", vehicle = *dir_ + "/A.yaml", params = *dir_ + "/identify.json";
-  for (const std::vector<std::string>& bad :
-       {std::vector<std::string>{"--horizon", "0"}, {"--scope", "sky"}, {"--set", "kd"}, {"--stride", "-1"}}) {
+  for (const std::vector<std::string>& bad : {std::vector<std::string>{"--horizon", "0"},
+                                              {"--scope", "sky"},
+                                              {"--set", "kd"},
+                                              {"--stride", "-1"},
+                                              {"--torque-bias-window", "-0.1"}}) {
     std::vector<std::string> args = {"predict", "--params", params, "--vehicle", vehicle, "--log", log};
     args.insert(args.end(), bad.begin(), bad.end());
     const auto run = RunRotorid(args);

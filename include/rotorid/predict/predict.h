@@ -69,6 +69,11 @@ struct PredictOptions {
   // this high above the lowest logged height of the whole log (or its `# ground_z:`).
   double ground_clearance_m = 0.05;
   double airborne_thrust_share = 0.5;
+  // 0: the model flies open loop, as a simulator would. > 0: each window also carries a constant
+  // body-frame torque bias, observed from the log over this many seconds before its start (the slope
+  // of the gyro minus the model's integrated angular acceleration there): a state estimated from the
+  // past, nothing after the start instant. Windows then need this much airborne past.
+  double torque_bias_window_s = 0.0;
   // Threads over start instants (0: the machine's cores).
   int threads = 0;
 

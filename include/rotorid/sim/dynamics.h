@@ -33,11 +33,13 @@ struct SimState {
 // A force on the vehicle that rotorid's model does not have (a tether, a payload's pull, wind),
 // acting at O_d, in the world frame: its horizontal part turns about z with `turn_period_s`
 // (0: constant), like a wind whose direction drifts. It reaches the accelerometer like any force.
+// `body_torque_nm`: a torque about O_d in the body frame (the torque bias `rotorid predict` observes).
 struct ExternalForce {
   Eigen::Vector3d world_n = Eigen::Vector3d::Zero();
   double turn_period_s = 0.0;
+  Eigen::Vector3d body_torque_nm = Eigen::Vector3d::Zero();
 
-  bool active() const { return !world_n.isZero(); }
+  bool active() const { return !world_n.isZero() || !body_torque_nm.isZero(); }
   Eigen::Vector3d At(double t_s) const;
 };
 
