@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rotorid/commands/command_input.h"
 #include "rotorid/ident/checks.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/ident/tls.h"
@@ -67,12 +68,14 @@ void AddFirstMomentOption(CLI::App* app, IdentifyCliOptions* options);
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* options);
 FlightSourceOptions SourceOptions(const IdentifyCliOptions& options);
 
+// The library's input options of a command line (the flights, --segment, the rotor signal and
+// column map, --config, --report, --quiet; "read:" lines and notes printed unless quiet). Throws
+// UsageError for unpaired options; the caller then validates its own and calls MarkOptionsValidated.
+CommandInputOptions ResolveCommandInput(const CLI::App& app, const FlightOptions& flights,
+                                        const FlightSourceOptions& source);
+
 // The flights of the command line: each log cut to its --window and segmented (--segment), so one
 // log may give several flights (one per kept stretch, same vehicle and weight).
-struct LoadedFlights {
-  std::vector<FlightData> flights;
-  std::vector<FlightInputSummary> inputs;  // one per log file, in the order given
-};
 // Reads the paired flights and prints a "read:" line per log unless quiet; throws rotorid::Error
 // naming the file at fault (UsageError for unpaired options).
 LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
@@ -98,11 +101,6 @@ void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training,
 void AddConfigOption(CLI::App* root);
 nlohmann::json ConfigJson(const CLI::App& app);
 
-// The HTML report's parts every command has: title "rotorid COMMAND", version, the signal
-// processing, what was read and the run settings (`settings`, the JSON report's "settings").
-ReportInput CommandReportInput(const std::string& command, const ObservationOptions& observation,
-                               const LoadedFlights& training, const LoadedFlights* held_out,
-                               const nlohmann::json& settings);
 // Writes the HTML report of --report (when given) and returns its path ("" without --report).
 std::string WriteCommandReport(const FlightOptions& options, const ReportInput& input);
 

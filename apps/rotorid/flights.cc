@@ -171,6 +171,25 @@ LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const s
 
 }  // namespace
 
+CommandInputOptions ResolveCommandInput(const CLI::App& app, const FlightOptions& flights,
+                                        const FlightSourceOptions& source) {
+  CommandInputOptions input;
+  input.training = {flights.vehicle_paths, flights.log_paths, flights.weights, flights.windows, "--log"};
+  input.held_out = {
+      flights.validate_vehicle_paths, flights.validate_log_paths, {}, flights.validate_windows, "--validate-log"};
+  input.segment = ParseSegmentMode(flights.segment);
+  input.source = source;
+  input.config = ConfigJson(app);
+  input.report_dir = flights.report_dir;
+  input.quiet = flights.quiet;
+  if (!flights.quiet) {
+    input.on_read = [](const std::string& line) { std::cout << line << "\n"; };
+    input.on_note = [](const std::string& note) { std::cerr << "rotorid: note: " << note << "\n"; };
+  }
+  if (const std::string problem = input.Validate(); !problem.empty()) throw UsageError(problem);
+  return input;
+}
+
 LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source) {
   return LoadFlights(options.vehicle_paths, options.log_paths, options.weights, options.windows, "--log", options,
                      source);
@@ -216,20 +235,6 @@ void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training,
   if (const nlohmann::json config = ConfigJson(app); !config.is_null()) (*report)["config"] = config;
 }
 
-ReportInput CommandReportInput(const std::string& command, const ObservationOptions& observation,
-                               const LoadedFlights& training, const LoadedFlights* held_out,
-                               const nlohmann::json& settings) {
-  ReportInput input;
-  input.title = "rotorid " + command;
-  input.command = command;
-  input.rotorid_version = kRotoridVersion;
-  input.observation = observation;
-  input.inputs = training.inputs;
-  if (held_out) input.validate_inputs = held_out->inputs;
-  input.settings = SettingsRows(settings);
-  return input;
-}
-
 std::string WriteCommandReport(const FlightOptions& options, const ReportInput& input) {
   if (options.report_dir.empty()) return {};
   ReportOptions report_options;
@@ -264,7 +269,8 @@ void PrintParameterTable(std::ostream& out, const std::vector<std::string>& name
     if (PredictsWithProfiled(solution, static_cast<int>(k)) || solution.PredictsWithinRange(static_cast<int>(k)))
       out << ", predicted with " << ShortNumber(PredictionChi(solution)[i]);
     if (solution.HasAllowedRange(static_cast<int>(k)))
-      out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. " << ShortNumber(solution.allowed_high[i]);
+      out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. "
+          << ShortNumber(solution.allowed_high[i]);
     out << "\n";
   }
   out.unsetf(std::ios::floatfield);

@@ -6,6 +6,7 @@
 #include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/report/predicted_parameters.h"
 
 namespace rotorid {
 
@@ -164,8 +165,7 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
 
 std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
                                                         const std::string& block, bool predicted) {
-  std::string chosen = block;
-  if (chosen.empty()) chosen = report.contains("refined") && report["refined"].contains("parameters") ? "refined" : "linear";
+  const std::string chosen = PredictedBlock(report, block);
   if (!report.is_object() || !report.contains(chosen) || !report[chosen].is_object() ||
       !report[chosen].contains("parameters") || !report[chosen]["parameters"].is_object())
     throw Error(source + ": not a rotorid identify/refine report (no '" + chosen + ".parameters')");
