@@ -165,10 +165,10 @@ std::string ParameterTableText(const std::vector<std::string>& names, const TlsS
   return out.str();
 }
 
-std::string WarningsText(const std::vector<std::string>& warnings) {
-  std::string text;
-  for (const std::string& w : warnings) text += "rotorid: warning: " + w + "\n";
-  return text;
+std::string EffectListText(const std::vector<EffectKind>& effects) {
+  std::string names;
+  for (EffectKind kind : effects) names += (names.empty() ? "" : ",") + kind->name();
+  return names;
 }
 
 }  // namespace rotorid

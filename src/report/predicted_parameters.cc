@@ -10,6 +10,12 @@ std::map<std::string, double> PredictedParameters(const IdimLayout& system, cons
   return NamedParameters(system, PredictionChi(solution));
 }
 
+std::map<std::string, double> PredictedParameters(std::map<std::string, double> values,
+                                                  const std::map<std::string, double>& predicts_with) {
+  for (const auto& [name, value] : predicts_with) values[name] = value;
+  return values;
+}
+
 std::string PredictedBlock(const nlohmann::json& report, const std::string& block) {
   if (!block.empty()) return block;
   const bool refined = report.is_object() && report.contains("refined") && report["refined"].is_object() &&

@@ -105,7 +105,7 @@ std::string WriteCommandReport(const CommandInputOptions& options, const ReportI
 // allows it).
 std::string ComponentsText(const std::vector<std::optional<double>>& values);
 std::string ParameterTableText(const std::vector<std::string>& names, const TlsSolution& solution);
-// "rotorid: warning: W\n" per warning (for stderr).
-std::string WarningsText(const std::vector<std::string>& warnings);
+// "delay,motor_lag,...": the effects' names, comma-separated (for --help texts).
+std::string EffectListText(const std::vector<EffectKind>& effects);
 
 }  // namespace rotorid

@@ -19,6 +19,10 @@ namespace rotorid {
 // By name ("kt", "kd", "<config>.<name>") from a solution over `system`'s parameters.
 std::map<std::string, double> PredictedParameters(const IdimLayout& system, const TlsSolution& solution);
 
+// Named values with what the model predicts with in their place (a diagnosis's `*_predicts_with`).
+std::map<std::string, double> PredictedParameters(std::map<std::string, double> values,
+                                                  const std::map<std::string, double>& predicts_with);
+
 // The block of a saved identify/refine report a model is taken from: `block` when given, else
 // "refined" when the report has refined parameters, else "linear".
 std::string PredictedBlock(const nlohmann::json& report, const std::string& block = "");
