@@ -145,7 +145,7 @@ json DiagnosisOptionsJson(const DiagnosisOptions& o) {
           {"max_effects", o.max_effects},
           {"screen_fraction", o.screen_fraction},
           {"rival_fraction", o.rival_fraction},
-          {"delay_search", {o.delay_search.min_s, o.delay_search.max_s, o.delay_search.step_s}},
+          {"delay_search_s", {o.delay_search.min_s, o.delay_search.max_s, o.delay_search.step_s}},
           {"refine_max_iterations", o.refine_max_iterations},
           {"reselect_essential", o.reselect_essential},
           {"bands_hz", bands},
