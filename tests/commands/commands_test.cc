@@ -16,6 +16,7 @@
 #include "rotorid/io/rotor_signal.h"
 #include "rotorid/report/json.h"
 #include "rotorid/report/predicted_parameters.h"
+#include "rotorid/report/refine_json.h"
 #include "support/test_support.h"
 
 namespace rotorid {
@@ -172,6 +173,38 @@ TEST(DiagnoseCommandTest, DrawsEachModelWithWhatItPredictsWith) {
   EXPECT_EQ(input.parameter_sets[0].values.at("B.I_zz"), 5.4e-3);
   EXPECT_EQ(input.parameter_sets[1].values.at("B.I_zz"), 5.5e-3);
   EXPECT_EQ(input.parameter_sets[1].values.at("kt"), 1.1e-5);
+}
+
+TEST(DiagnoseCommandTest, WritesRotorDragAsRefineDoes) {
+  const EffectKind drag = ParseEffectList("rotor_drag").front();
+  DiagnoseCommandResult result;
+  for (HeldOutGap* gap : {&result.diagnosis.baseline, &result.diagnosis.final_gap})
+    for (auto* values : {&gap->relative_error_pct, &gap->gap_pct, &gap->noise_floor_pct, &gap->model_error_pct})
+      values->assign(kNumWrenchComponents, 1.0);
+  result.diagnosis.final_model = {drag};
+  result.diagnosis.final_effects.Set(drag, Eigen::Vector2d(0.012, 3e-4));
+  result.diagnosis.final_effects_std.Set(drag, Eigen::Vector2d(1e-3, 2e-5));
+  EffectVerdict verdict;
+  verdict.kind = drag;
+  verdict.value = Eigen::Vector2d(0.012, 3e-4);
+  verdict.std = Eigen::Vector2d(1e-3, 2e-5);
+  verdict.detectable_above = Eigen::Vector2d(1e-3, 1e-5);
+  result.diagnosis.ranking = {verdict};
+  const nlohmann::json report = DiagnoseJson(result);
+  // Before: one key, rotor_drag_coefficient, holding [k_d, k_f]; refine writes two.
+  const nlohmann::json& effects = report["final"]["effects"];
+  EXPECT_EQ(effects["rotor_drag_coefficient"]["value"], 0.012);
+  EXPECT_EQ(effects["flapping_moment_coefficient"]["value"], 3e-4);
+  EXPECT_EQ(effects["flapping_moment_coefficient"]["std"], 2e-5);
+  const nlohmann::json& magnitude = report["ranking"][0]["magnitude"];
+  EXPECT_EQ(magnitude["rotor_drag_coefficient"]["std"], 1e-3);
+  EXPECT_EQ(magnitude["flapping_moment_coefficient"]["value"], 3e-4);
+  EXPECT_EQ(report["ranking"][0]["detectable_above"]["flapping_moment_coefficient"], 1e-5);
+  Effects std_dev;
+  std_dev.Set(drag, Eigen::Vector2d(1e-3, 2e-5));
+  const nlohmann::json refined = EffectsJson(result.diagnosis.final_effects, std_dev, {drag});
+  for (const char* name : {"rotor_drag_coefficient", "flapping_moment_coefficient"})
+    EXPECT_EQ(refined[name]["value"], effects[name]["value"]) << name;
 }
 
 }  // namespace
