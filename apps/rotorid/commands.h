@@ -66,6 +66,7 @@ void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* options);
 void AddFirstMomentOption(CLI::App* app, IdentifyCliOptions* options);
 // Turns the parsed strings into library options (throws rotorid::Error on invalid values).
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* options);
+// The reader options of --rotor-signal and --column-map (checked by ResolveCommandInput).
 FlightSourceOptions SourceOptions(const IdentifyCliOptions& options);
 
 // The library's input options of a command line (the flights, --segment, the rotor signal and

@@ -1,16 +1,7 @@
-#include <algorithm>
-#include <iomanip>
 #include <iostream>
-#include <sstream>
 
 #include "commands.h"
-#include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
-#include "rotorid/io/vehicle_yaml.h"
-#include "rotorid/model/parameters.h"
-#include "rotorid/refine/effect_model.h"
-#include "rotorid/report/input_json.h"
-#include "rotorid/report/json.h"
 
 namespace rotorid::cli {
 
@@ -127,8 +118,7 @@ FlightSourceOptions SourceOptions(const IdentifyCliOptions& o) {
   FlightSourceOptions source;
   source.rotor_signal = o.rotor_signal;
   source.column_map_path = o.column_map;
-  if (const std::string problem = source.Validate(); !problem.empty()) throw UsageError(problem);
-  return source;
+  return source;  // checked with the flights (ResolveCommandInput)
 }
 
 CommandInputOptions ResolveCommandInput(const CLI::App& app, const FlightOptions& flights,
