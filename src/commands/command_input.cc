@@ -10,6 +10,7 @@
 #include "rotorid/refine/refine.h"
 #include "rotorid/report/input_json.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/predicted_parameters.h"
 
 namespace rotorid {
 
@@ -155,8 +156,7 @@ std::string ParameterTableText(const std::vector<std::string>& names, const TlsS
         << (solution.essential[k] ? "yes" : "no (discarded)");
     // A discarded inertia the model still estimates and predicts with (PredictionChi), and the range a
     // physical body allows it.
-    if (PredictsWithProfiled(solution, static_cast<int>(k)) || solution.PredictsWithinRange(static_cast<int>(k)))
-      out << ", predicted with " << ShortNumber(predicted[i]);
+    if (PredictsWithOtherValue(solution, static_cast<int>(k))) out << ", predicted with " << ShortNumber(predicted[i]);
     if (solution.HasAllowedRange(static_cast<int>(k)))
       out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. "
           << ShortNumber(solution.allowed_high[i]);

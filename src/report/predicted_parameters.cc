@@ -10,6 +10,10 @@ std::map<std::string, double> PredictedParameters(const IdimLayout& system, cons
   return NamedParameters(system, PredictionChi(solution));
 }
 
+bool PredictsWithOtherValue(const TlsSolution& solution, int k) {
+  return PredictsWithProfiled(solution, k) || solution.PredictsWithinRange(k);
+}
+
 std::map<std::string, double> PredictedParameters(std::map<std::string, double> values,
                                                   const std::map<std::string, double>& predicts_with) {
   for (const auto& [name, value] : predicts_with) values[name] = value;

@@ -127,6 +127,28 @@ TEST_F(CommandsTest, ValidatePredictsInJsonAndHtmlWithTheSavedPredictsWith) {
   EXPECT_EQ(ValidateJson(result)["block"], "linear");
 }
 
+TEST(IdentifyCommandTest, AnInertiaPredictedOnlyWithinTheRangeABodyAllowsIsMarkedPredictedWith) {
+  IdentifyCommandOptions options;
+  options.input.training = {{Sim("A.yaml"), Sim("A.yaml")}, {Sim("A_train.csv"), Sim("A_val.csv")}, {}, {}, "--log"};
+  options.input.quiet = true;
+  options.identify.first_moment = FirstMoment::kPerFlight;
+  IdentifyCommandResult result = RunIdentify(options);
+  TlsSolution& solution = result.linear.solution;
+  int within = -1;
+  for (int k = 0; k < solution.chi.size(); ++k)
+    if (solution.PredictsWithinRange(k)) within = k;
+  ASSERT_GE(within, 0) << "A alone, per-flight first moments: I_zz is predicted within its range";
+  // As for a discarded inertia whose profiled estimate is negative (jana04's I_xx) or absent: the model
+  // predicts with a value a body allows, not with an estimate.
+  solution.profiled[static_cast<size_t>(within)] = false;
+  ASSERT_FALSE(PredictsWithProfiled(solution, within));
+  const std::string& name = result.linear.system.parameter_names[static_cast<size_t>(within)];
+  const nlohmann::json entry = IdentifyJson(result)["linear"]["parameters"][name];
+  EXPECT_TRUE(entry["predicts_within_range"].get<bool>());
+  EXPECT_EQ(entry["predicts_with"], PredictionChi(solution)[within]);
+  EXPECT_NE(IdentifyBrief(result).find("predicted with"), std::string::npos);
+}
+
 TEST(DelayCommandTest, DrawsDiscardedInertiaAtItsPredictedValueAndWritesDelaySearchS) {
   DelayCommandOptions options;
   options.input = BundledB("B_train.csv");

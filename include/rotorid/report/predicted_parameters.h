@@ -19,6 +19,11 @@ namespace rotorid {
 // By name ("kt", "kd", "<config>.<name>") from a solution over `system`'s parameters.
 std::map<std::string, double> PredictedParameters(const IdimLayout& system, const TlsSolution& solution);
 
+// Whether the model predicts with another value than the reported chi[k] (PredictionChi): a
+// discarded inertia at its profiled estimate (PredictsWithProfiled) or at a value a body allows
+// (PredictsWithinRange). The JSON's `predicts_with`, the console table and the HTML answer mark it.
+bool PredictsWithOtherValue(const TlsSolution& solution, int k);
+
 // Named values with what the model predicts with in their place (a diagnosis's `*_predicts_with`).
 std::map<std::string, double> PredictedParameters(std::map<std::string, double> values,
                                                   const std::map<std::string, double>& predicts_with);
