@@ -6,11 +6,13 @@
 
 #include <string>
 
+#include "report/html_answer.h"
 #include "rotorid/commands/ablate_command.h"
 #include "rotorid/commands/delay_command.h"
 #include "rotorid/commands/diagnose_command.h"
 #include "rotorid/commands/identify_command.h"
 #include "rotorid/commands/validate_command.h"
+#include "rotorid/core/text.h"
 #include "rotorid/io/blackbox_flight.h"
 #include "rotorid/io/crazyflie_flight.h"
 #include "rotorid/io/rotor_signal.h"
@@ -125,6 +127,20 @@ TEST_F(CommandsTest, ValidatePredictsInJsonAndHtmlWithTheSavedPredictsWith) {
   // Before: the JSON's Table III predicted with it, the HTML drew the same model with 0.
   EXPECT_EQ(ValidateReportInput(result).parameter_sets.at(0).values.at(name), predicted);
   EXPECT_EQ(ValidateJson(result)["block"], "linear");
+}
+
+TEST(IdentifyCommandTest, TheAnswerGivesTheValueADiscardedInertiaIsPredictedWith) {
+  IdentifyCommandOptions options;
+  options.input.training = {
+      {Sim("A.yaml"), Sim("B.yaml")}, {Sim("A_train.csv"), Sim("B_train.csv")}, {1.0, 2.0}, {}, "--log"};
+  options.input.quiet = true;
+  const IdentifyCommandResult result = RunIdentify(options);
+  const nlohmann::json entry = IdentifyJson(result)["linear"]["parameters"]["A.I_zz"];
+  ASSERT_TRUE(entry.contains("predicts_with")) << entry;
+  // Before: "not fixed by these flights" alone, while the JSON predicts with 0.01799 (a value a body allows).
+  const std::string expected = "<code>A.I_zz</code></td><td>not fixed by these flights (predicted with " +
+                               ShortNumber(entry["predicts_with"].get<double>()) + " kg m&sup2;)";
+  EXPECT_NE(internal::AnswerHtml(IdentifyReportInput(result)).find(expected), std::string::npos) << expected;
 }
 
 TEST(IdentifyCommandTest, AnInertiaPredictedOnlyWithinTheRangeABodyAllowsIsMarkedPredictedWith) {
