@@ -93,10 +93,9 @@ nlohmann::json VectorJson(const Eigen::VectorXd& v) {
 
 nlohmann::json ObservationOptionsJson(const ObservationOptions& options) {
   return {{"source", DataSourceName(options.source)},
-          {"filter",
-           {{"type", "butterworth low-pass, zero-phase"},
-            {"order", options.filter.order},
-            {"cutoff_hz", options.filter.cutoff_hz}}},
+          {"filter", {{"type", "butterworth low-pass, zero-phase"},
+                      {"order", options.filter.order},
+                      {"cutoff_hz", options.filter.cutoff_hz}}},
           {"row_rate_hz", options.row_rate_hz},
           {"edge_trim_s", options.edge_trim_s}};
 }
@@ -104,8 +103,7 @@ nlohmann::json ObservationOptionsJson(const ObservationOptions& options) {
 ObservationOptions ObservationOptionsFromJson(const nlohmann::json& j) {
   ObservationOptions options;
   if (!j.is_object()) return options;
-  if (j.contains("source"))
-    options.source = j.at("source").get<std::string>() == "mocap" ? DataSource::kMocap : DataSource::kImu;
+  if (j.contains("source")) options.source = j.at("source").get<std::string>() == "mocap" ? DataSource::kMocap : DataSource::kImu;
   if (j.contains("filter")) {
     options.filter.order = j.at("filter").value("order", options.filter.order);
     options.filter.cutoff_hz = j.at("filter").value("cutoff_hz", options.filter.cutoff_hz);
@@ -116,9 +114,12 @@ ObservationOptions ObservationOptionsFromJson(const nlohmann::json& j) {
 }
 
 nlohmann::json TlsOptionsJson(const TlsOptions& options) {
-  return {{"method", TlsMethodName(options.method)},      {"weight_by_component", options.weight_by_component},
-          {"select_essential", options.select_essential}, {"r_sigma", options.r_sigma},
-          {"max_rel_std_pct", options.max_rel_std_pct},   {"fixed_zero", options.fixed_zero}};
+  return {{"method", TlsMethodName(options.method)},
+          {"weight_by_component", options.weight_by_component},
+          {"select_essential", options.select_essential},
+          {"r_sigma", options.r_sigma},
+          {"max_rel_std_pct", options.max_rel_std_pct},
+          {"fixed_zero", options.fixed_zero}};
 }
 
 nlohmann::json FlightFitJson(const FlightFit& fit) {
@@ -129,10 +130,9 @@ nlohmann::json FlightFitJson(const FlightFit& fit) {
           {"samples", fit.samples},
           {"row_samples", fit.row_samples},
           {"duration_s", fit.duration_s},
-          {"excitation",
-           {{"angular_acceleration_rms", VectorJson(e.angular_acceleration_rms)},
-            {"angular_velocity_rms", VectorJson(e.angular_velocity_rms)},
-            {"thrust_variation_pct", JsonNumber(e.thrust_variation_pct)}}},
+          {"excitation", {{"angular_acceleration_rms", VectorJson(e.angular_acceleration_rms)},
+                          {"angular_velocity_rms", VectorJson(e.angular_velocity_rms)},
+                          {"thrust_variation_pct", JsonNumber(e.thrust_variation_pct)}}},
           {"relative_error_pct", ComponentsJson(fit.relative_error_pct)},
           {"mean_force_residual_n", VectorJson(fit.mean_force_residual_n)}};
 }
@@ -154,12 +154,11 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
           {"relative_error_pct", ComponentsJson(result.relative_error_pct)},
           {"discarded", discarded},
           {"flights", flights},
-          {"statistics",
-           {{"sigma_w", JsonNumber(s.sigma_w)},
-            {"singular_values", VectorJson(s.singular_values)},
-            {"scale_entry", JsonNumber(s.scale_entry)},
-            {"iterations", s.iterations},
-            {"rows", result.system.num_rows()}}},
+          {"statistics", {{"sigma_w", JsonNumber(s.sigma_w)},
+                          {"singular_values", VectorJson(s.singular_values)},
+                          {"scale_entry", JsonNumber(s.scale_entry)},
+                          {"iterations", s.iterations},
+                          {"rows", result.system.num_rows()}}},
           {"warnings", result.warnings}};
 }
 
