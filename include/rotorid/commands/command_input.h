@@ -56,7 +56,7 @@ struct CommandInputOptions {
   std::function<void(const std::string&)> on_note;
 
   // Empty when valid, else what is wrong (a usage error): unpaired vehicle files, weights or
-  // windows, a weight that is not positive, an invalid rotor signal or column map.
+  // windows, a weight that is not positive, an unknown rotor signal (RotorSignalProblem).
   std::string Validate() const;
 };
 
