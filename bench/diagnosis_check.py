@@ -14,24 +14,16 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from effect_check import as_list, judge_effect, read_arguments  # noqa: E402
 
 
-# A diagnosis reports an effect's coordinates under its parameter name; the truth names some apart.
-TRUTH_KEYS = {"rotor_drag_coefficient": ["rotor_drag_coefficient", "flapping_moment_coefficient"]}
-
-
+# A diagnosis reports an effect's coordinates under the parameter names the truth uses (rotor_drag:
+# rotor_drag_coefficient and flapping_moment_coefficient apart, as refine writes them).
 def truth_of(truth, key):
-    keys = TRUTH_KEYS.get(key, [key])
-    values = [v for k in keys for v in as_list(truth["effects"].get(k, 0))]
-    return values if len(values) > 1 else values[0]
+    return truth["effects"].get(key, 0)
 
 
 def withheld_effects(truth, ranking):
     """Names of the effects whose truth is non-zero: the ranking's effect name where a ranked entry
     reports that parameter, else the truth's key (an effect that was not a candidate)."""
     owner = {key: e["effect"] for e in ranking for key in e.get("magnitude", {})}
-    for key, values in TRUTH_KEYS.items():
-        for k in values:
-            if key in owner:
-                owner.setdefault(k, owner[key])
     return {owner.get(key, key + " (not a candidate)") for key, value in truth["effects"].items()
             if any(v != 0 for v in as_list(value))}
 

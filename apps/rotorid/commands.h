@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rotorid/commands/command_input.h"
 #include "rotorid/ident/checks.h"
 #include "rotorid/ident/identify.h"
 #include "rotorid/ident/tls.h"
@@ -65,46 +66,19 @@ void AddIdentifyOptions(CLI::App* app, IdentifyCliOptions* options);
 void AddFirstMomentOption(CLI::App* app, IdentifyCliOptions* options);
 // Turns the parsed strings into library options (throws rotorid::Error on invalid values).
 IdentifyOptions ResolveIdentifyOptions(IdentifyCliOptions* options);
+// The reader options of --rotor-signal and --column-map (checked by ResolveCommandInput).
 FlightSourceOptions SourceOptions(const IdentifyCliOptions& options);
 
-// The flights of the command line: each log cut to its --window and segmented (--segment), so one
-// log may give several flights (one per kept stretch, same vehicle and weight).
-struct LoadedFlights {
-  std::vector<FlightData> flights;
-  std::vector<FlightInputSummary> inputs;  // one per log file, in the order given
-};
-// Reads the paired flights and prints a "read:" line per log unless quiet; throws rotorid::Error
-// naming the file at fault (UsageError for unpaired options).
-LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source);
-LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source);
-// Per-flight first moments: fits the first moment of each held-out flight (FitHeldOutFirstMoments)
-// into `parameters`, with the rows `effects` give; returns them as {name: value} (empty object
-// when the parameters share their first moments).
-nlohmann::json FitHeldOutFirstMomentsJson(std::vector<ProcessedFlight>* flights,
-                                          std::map<std::string, double>* parameters, const Effects& effects);
-// The effects an --effects value names. "all" leaves out the effects whose inputs a training flight
-// lacks (rotor_drag without a velocity, say), with a note on stderr unless quiet; an effect named
-// explicitly is kept, and the refinement refuses it with the reason.
-std::vector<EffectKind> EffectsForFlights(const std::string& list, const IdentificationResult& linear, bool quiet);
-
-// Sections every report carries whatever the command: input.flights[] (and
-// input.validate_flights[]), and the --config file's options when one was given. Plausibility
-// checks and other common sections belong here too.
-void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training, const LoadedFlights* held_out,
-                             nlohmann::json* report);
+// The library's input options of a command line (the flights, --segment, the rotor signal and
+// column map, --config, --report, --quiet; "read:" lines and notes printed unless quiet). Throws
+// UsageError for unpaired options; the caller then validates its own and calls MarkOptionsValidated.
+CommandInputOptions ResolveCommandInput(const CLI::App& app, const FlightOptions& flights,
+                                        const FlightSourceOptions& source);
 
 // --config FILE.yaml (apps/rotorid/config.cc), on the root once every subcommand is registered,
 // and the file's options for the report of `app` (null when no file was given).
 void AddConfigOption(CLI::App* root);
 nlohmann::json ConfigJson(const CLI::App& app);
-
-// The HTML report's parts every command has: title "rotorid COMMAND", version, the signal
-// processing, what was read and the run settings (`settings`, the JSON report's "settings").
-ReportInput CommandReportInput(const std::string& command, const ObservationOptions& observation,
-                               const LoadedFlights& training, const LoadedFlights* held_out,
-                               const nlohmann::json& settings);
-// Writes the HTML report of --report (when given) and returns its path ("" without --report).
-std::string WriteCommandReport(const FlightOptions& options, const ReportInput& input);
 
 // A mistake on the command line (exit code 2, INTERFACE.md 4). rotorid::Error thrown while a
 // command still validates its options counts as one too: see MarkOptionsValidated.
@@ -113,13 +87,11 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 // Called once a command has validated its options and starts reading input: rotorid::Error from
-// here on is bad input (exit 1), before it a usage error (exit 2). LoadTrainingFlights calls it.
+// here on is bad input (exit 1), before it a usage error (exit 2).
 void MarkOptionsValidated();
 bool OptionsValidated();
 
 // Human-readable output.
-std::string FormatComponents(const std::vector<std::optional<double>>& values);
-void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution);
 void PrintWarnings(const std::vector<std::string>& warnings);
 // Prints the checks that did not pass (errors even under --quiet) and a summary line; returns the
 // exit code they call for: 3 when a check has status error, else 0.

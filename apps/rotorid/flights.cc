@@ -1,16 +1,7 @@
-#include <algorithm>
-#include <iomanip>
 #include <iostream>
-#include <sstream>
 
 #include "commands.h"
-#include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
-#include "rotorid/io/vehicle_yaml.h"
-#include "rotorid/model/parameters.h"
-#include "rotorid/refine/effect_model.h"
-#include "rotorid/report/input_json.h"
-#include "rotorid/report/json.h"
 
 namespace rotorid::cli {
 
@@ -127,147 +118,26 @@ FlightSourceOptions SourceOptions(const IdentifyCliOptions& o) {
   FlightSourceOptions source;
   source.rotor_signal = o.rotor_signal;
   source.column_map_path = o.column_map;
-  if (const std::string problem = source.Validate(); !problem.empty()) throw UsageError(problem);
-  return source;
+  return source;  // checked with the flights (ResolveCommandInput)
 }
 
-namespace {
-
-std::string CountMismatch(size_t got, const std::string& what, size_t logs, const std::string& log_option) {
-  return "got " + std::to_string(got) + " " + what + " for " + std::to_string(logs) + " " + log_option +
-         "; give one per log, in the same order";
-}
-
-LoadedFlights LoadFlights(const std::vector<std::string>& vehicle_paths, const std::vector<std::string>& log_paths,
-                          const std::vector<double>& weights, const std::vector<std::string>& windows,
-                          const std::string& log_option, const FlightOptions& options,
-                          const FlightSourceOptions& source) {
-  if (vehicle_paths.size() != log_paths.size())
-    throw UsageError(CountMismatch(vehicle_paths.size(), "vehicle files", log_paths.size(), log_option));
-  if (!weights.empty() && weights.size() != log_paths.size())
-    throw UsageError(CountMismatch(weights.size(), "--weight values", log_paths.size(), log_option));
-  if (!windows.empty() && windows.size() != log_paths.size())
-    throw UsageError(CountMismatch(windows.size(), "windows", log_paths.size(), log_option));
-  for (double weight : weights)
-    if (!(weight > 0.0)) throw UsageError("--weight must be positive, got " + std::to_string(weight));
-  MarkOptionsValidated();
-  const SegmentMode mode = ParseSegmentMode(options.segment);
-  LoadedFlights loaded;
-  for (size_t i = 0; i < log_paths.size(); ++i) {
-    const Vehicle vehicle = ReadVehicleYaml(vehicle_paths[i]);
-    const std::optional<TimeWindow> window =
-        windows.empty() ? std::nullopt : std::optional<TimeWindow>(ParseTimeWindow(windows[i]));
-    FlightLog log = LoadFlightLog(log_paths[i], vehicle, source);
-    // Before the segmentation, which would leave a deg/s gyro's log out as "gyro limit".
-    if (const Check rate = CheckGyroRate(log); rate.status == CheckStatus::kError) throw Error(rate.message);
-    SelectedFlight selected = SelectFlight(std::move(log), log_paths[i], window, mode);
-    if (!options.quiet) std::cout << selected.summary.ConsoleLine() << "\n";
-    for (FlightLog& segment : selected.segments)
-      loaded.flights.push_back({vehicle, std::move(segment), weights.empty() ? 1.0 : weights[i], static_cast<int>(i)});
-    loaded.inputs.push_back(std::move(selected.summary));
+CommandInputOptions ResolveCommandInput(const CLI::App& app, const FlightOptions& flights,
+                                        const FlightSourceOptions& source) {
+  CommandInputOptions input;
+  input.training = {flights.vehicle_paths, flights.log_paths, flights.weights, flights.windows, "--log"};
+  input.held_out = {
+      flights.validate_vehicle_paths, flights.validate_log_paths, {}, flights.validate_windows, "--validate-log"};
+  input.segment = ParseSegmentMode(flights.segment);
+  input.source = source;
+  input.config = ConfigJson(app);
+  input.report_dir = flights.report_dir;
+  input.quiet = flights.quiet;
+  if (!flights.quiet) {
+    input.on_read = [](const std::string& line) { std::cout << line << "\n"; };
+    input.on_note = [](const std::string& note) { std::cerr << "rotorid: note: " << note << "\n"; };
   }
-  return loaded;
-}
-
-}  // namespace
-
-LoadedFlights LoadTrainingFlights(const FlightOptions& options, const FlightSourceOptions& source) {
-  return LoadFlights(options.vehicle_paths, options.log_paths, options.weights, options.windows, "--log", options,
-                     source);
-}
-
-nlohmann::json FitHeldOutFirstMomentsJson(std::vector<ProcessedFlight>* flights,
-                                          std::map<std::string, double>* parameters, const Effects& effects) {
-  const std::vector<std::string> names =
-      FitHeldOutFirstMoments(flights, parameters, [&effects](const ProcessedFlight& f) {
-        // Without effects, the rows the linear identification used.
-        return effects.AllZero() ? BuildIdimMatrix(f) : BuildIdimMatrixWithEffects(f, effects);
-      });
-  nlohmann::json out = nlohmann::json::object();
-  for (const std::string& name : names) out[name] = parameters->at(name);
-  return out;
-}
-
-std::vector<EffectKind> EffectsForFlights(const std::string& list, const IdentificationResult& linear, bool quiet) {
-  const std::vector<EffectKind> named = ParseEffectList(list);
-  if (list != "all" && list != "every") return named;
-  std::vector<EffectKind> kept;
-  for (EffectKind kind : named) {
-    std::string why;
-    for (const ProcessedFlight& flight : linear.flights)
-      if (why.empty()) why = kind->Unavailable(flight.inputs());
-    if (why.empty()) {
-      kept.push_back(kind);
-    } else if (!quiet) {
-      std::cerr << "rotorid: note: " << why << "; left out of \"" << list << "\"\n";
-    }
-  }
-  return kept;
-}
-
-LoadedFlights LoadValidationFlights(const FlightOptions& options, const FlightSourceOptions& source) {
-  return LoadFlights(options.validate_vehicle_paths, options.validate_log_paths, {}, options.validate_windows,
-                     "--validate-log", options, source);
-}
-
-void AddCommonReportSections(const CLI::App& app, const LoadedFlights& training, const LoadedFlights* held_out,
-                             nlohmann::json* report) {
-  (*report)["input"] = InputJson(training.inputs, held_out ? held_out->inputs : std::vector<FlightInputSummary>{});
-  if (const nlohmann::json config = ConfigJson(app); !config.is_null()) (*report)["config"] = config;
-}
-
-ReportInput CommandReportInput(const std::string& command, const ObservationOptions& observation,
-                               const LoadedFlights& training, const LoadedFlights* held_out,
-                               const nlohmann::json& settings) {
-  ReportInput input;
-  input.title = "rotorid " + command;
-  input.command = command;
-  input.rotorid_version = kRotoridVersion;
-  input.observation = observation;
-  input.inputs = training.inputs;
-  if (held_out) input.validate_inputs = held_out->inputs;
-  input.settings = SettingsRows(settings);
+  if (const std::string problem = input.Validate(); !problem.empty()) throw UsageError(problem);
   return input;
-}
-
-std::string WriteCommandReport(const FlightOptions& options, const ReportInput& input) {
-  if (options.report_dir.empty()) return {};
-  ReportOptions report_options;
-  report_options.print_warnings = !options.quiet;
-  return WriteHtmlReport(options.report_dir, input, report_options).html_path;
-}
-
-std::string FormatComponents(const std::vector<std::optional<double>>& values) {
-  std::ostringstream out;
-  for (size_t j = 0; j < values.size(); ++j) {
-    if (!values[j]) continue;
-    out << (out.tellp() > 0 ? "  " : "") << kWrenchComponentNames[j] << " " << std::fixed << std::setprecision(2)
-        << *values[j] << " %";
-  }
-  return out.str();
-}
-
-void PrintParameterTable(std::ostream& out, const std::vector<std::string>& names, const TlsSolution& solution) {
-  size_t width = 10;
-  for (const std::string& n : names) width = std::max(width, n.size() + 2);
-  out << std::left << std::setw(static_cast<int>(width)) << "parameter" << std::right << std::setw(14) << "value"
-      << std::setw(12) << "std" << std::setw(10) << "%sigma"
-      << "  essential\n";
-  for (size_t k = 0; k < names.size(); ++k) {
-    const auto i = static_cast<Eigen::Index>(k);
-    out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific
-        << std::setprecision(4) << std::setw(14) << solution.chi[i] << std::setprecision(2) << std::setw(12)
-        << solution.std[i] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[i] << "  "
-        << (solution.essential[k] ? "yes" : "no (discarded)");
-    // A discarded inertia the model still estimates and predicts with (PredictionChi), and the range a
-    // physical body allows it.
-    if (PredictsWithProfiled(solution, static_cast<int>(k)) || solution.PredictsWithinRange(static_cast<int>(k)))
-      out << ", predicted with " << ShortNumber(PredictionChi(solution)[i]);
-    if (solution.HasAllowedRange(static_cast<int>(k)))
-      out << ", a body allows " << ShortNumber(solution.allowed_low[i]) << " .. " << ShortNumber(solution.allowed_high[i]);
-    out << "\n";
-  }
-  out.unsetf(std::ios::floatfield);
 }
 
 void PrintWarnings(const std::vector<std::string>& warnings) {

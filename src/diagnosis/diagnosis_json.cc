@@ -29,6 +29,30 @@ json EffectValue(const Eigen::VectorXd& v) {
   return out;
 }
 
+// An effect's coordinates under the parameter names INTERFACE.md gives them, as refine and the
+// simulator's truth write them: one key per coefficient of an effect whose coefficients it names
+// apart (rotor_drag: rotor_drag_coefficient, flapping_moment_coefficient; null without a value),
+// else one key with a number or an array.
+json ByParameter(EffectKind kind, const Eigen::VectorXd& v) {
+  const std::vector<std::string>& labels = kind->info().labels;
+  json out = json::object();
+  if (labels.empty()) {
+    out[EffectParameterName(kind)] = EffectValue(v);
+    return out;
+  }
+  for (size_t k = 0; k < labels.size(); ++k)
+    out[labels[k]] = static_cast<Eigen::Index>(k) < v.size() ? json(v[static_cast<Eigen::Index>(k)]) : json(nullptr);
+  return out;
+}
+
+// {parameter: {value, std}} of ByParameter.
+json MagnitudeJson(EffectKind kind, const Eigen::VectorXd& value, const Eigen::VectorXd& std_dev) {
+  const json values = ByParameter(kind, value), stds = ByParameter(kind, std_dev);
+  json out = json::object();
+  for (const auto& [name, x] : values.items()) out[name] = {{"value", x}, {"std", stds[name]}};
+  return out;
+}
+
 json Kinds(const std::vector<EffectKind>& kinds) {
   json out = json::array();
   for (EffectKind kind : kinds) out.push_back(EffectName(kind));
@@ -145,7 +169,7 @@ json DiagnosisOptionsJson(const DiagnosisOptions& o) {
           {"max_effects", o.max_effects},
           {"screen_fraction", o.screen_fraction},
           {"rival_fraction", o.rival_fraction},
-          {"delay_search", {o.delay_search.min_s, o.delay_search.max_s, o.delay_search.step_s}},
+          {"delay_search_s", {o.delay_search.min_s, o.delay_search.max_s, o.delay_search.step_s}},
           {"refine_max_iterations", o.refine_max_iterations},
           {"reselect_essential", o.reselect_essential},
           {"bands_hz", bands},
@@ -159,13 +183,12 @@ json DiagnosisOptionsJson(const DiagnosisOptions& o) {
 json DiagnosisJson(const Diagnosis& d) {
   json ranking = json::array();
   for (const EffectVerdict& v : d.ranking) {
-    const std::string name = EffectParameterName(v.kind);
     json entry = {{"effect", EffectName(v.kind)},
                   {"status", v.status},
                   {"significant", v.significant},
                   {"shrink_pct", v.test.shrink_pct},
-                  {"magnitude", {{name, {{"value", EffectValue(v.value)}, {"std", EffectValue(v.std)}}}}},
-                  {"detectable_above", {{name, EffectValue(v.detectable_above)}}},
+                  {"magnitude", MagnitudeJson(v.kind, v.value, v.std)},
+                  {"detectable_above", ByParameter(v.kind, v.detectable_above)},
                   {"step", v.step},
                   {"tested_on_top_of", Kinds(v.tested_on_top_of)},
                   {"test", TestJson(v.test)},
@@ -175,12 +198,12 @@ json DiagnosisJson(const Diagnosis& d) {
                   {"dropped_as_redundant", v.dropped_as_redundant},
                   {"note", v.note}};
     if (const std::vector<std::string> held = v.kind->HeldLabels(static_cast<int>(v.value.size())); !held.empty())
-      entry["magnitude"][name]["held"] = held;
+      for (auto& [name, magnitude] : entry["magnitude"].items()) magnitude["held"] = held;
     entry["alone"] = v.alone_test ? TestJson(*v.alone_test) : json(nullptr);
     if (v.scale_free) entry["scale_free"] = ScaleFreeJson(*v.scale_free);
     // Selected by a scale-free test whose rotor coefficient no fit fixes: no value in SI.
     if (v.selected && v.scale_free && v.value.size() == 0)
-      entry["magnitude"][name] = {{"value", nullptr}, {"std", nullptr}};
+      for (auto& [name, magnitude] : entry["magnitude"].items()) magnitude = {{"value", nullptr}, {"std", nullptr}};
     ranking.push_back(entry);
   }
   json steps = json::array();
@@ -208,8 +231,7 @@ json DiagnosisJson(const Diagnosis& d) {
                           {"note", c.note}});
   json final_effects = json::object();
   for (EffectKind kind : d.final_model)
-    final_effects[EffectParameterName(kind)] = {{"value", EffectValue(d.final_effects.Get(kind))},
-                                                {"std", EffectValue(d.final_effects_std.Get(kind))}};
+    final_effects.update(MagnitudeJson(kind, d.final_effects.Get(kind), d.final_effects_std.Get(kind)));
   json where = LocationJson(d.where);
   where["component"] = kWrenchComponentNames[d.where_component];
   where["gap_pct"] = Components(d.baseline.gap_pct);

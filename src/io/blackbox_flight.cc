@@ -11,6 +11,7 @@
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
+#include "rotorid/io/rotor_signal.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/signal/resample.h"
 
@@ -246,9 +247,7 @@ void AddMotionCapture(const BlackboxFrames& frames, const std::vector<int>& kept
 
 std::string BlackboxFlightOptions::Validate() const {
   if (log_index < 0) return "blackbox log index must be >= 0 (0: the longest), got " + std::to_string(log_index);
-  if (rotor_signal != "auto" && rotor_signal != "rpm" && rotor_signal != "command")
-    return "rotor signal must be auto, rpm or command, got '" + rotor_signal + "'";
-  return {};
+  return RotorSignalProblem(rotor_signal);
 }
 
 const BlackboxLog& SelectBlackboxLog(const std::vector<BlackboxLog>& logs, const std::string& source, int log_index) {

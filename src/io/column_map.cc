@@ -15,6 +15,7 @@
 #include "rotorid/core/units.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/io/flight_csv.h"
+#include "rotorid/io/rotor_signal.h"
 #include "rotorid/model/rotation.h"
 
 namespace rotorid {
@@ -453,9 +454,7 @@ Eigen::Matrix3d FrameFlip(bool flip) {
 
 // Which rotor signal: speed when available (unless commands are asked for), else the command.
 const MappedQuantity* ChooseRotorSignal(const ColumnMap& map, const std::string& rotor_signal, int num_rotors) {
-  if (rotor_signal != "auto" && rotor_signal != "rpm" && rotor_signal != "command") {
-    throw Error("rotor signal must be auto, rpm or command, got '" + rotor_signal + "'");
-  }
+  if (const std::string problem = RotorSignalProblem(rotor_signal); !problem.empty()) throw Error(problem);
   const MappedQuantity* speed = map.rotors && !map.rotors->is_command ? &*map.rotors : nullptr;
   const MappedQuantity* command =
       map.rotor_commands ? &*map.rotor_commands : (map.rotors && map.rotors->is_command ? &*map.rotors : nullptr);

@@ -13,6 +13,7 @@
 #include "rotorid/core/text.h"
 #include "rotorid/core/units.h"
 #include "rotorid/io/flight_csv.h"
+#include "rotorid/io/rotor_signal.h"
 #include "rotorid/model/rotation.h"
 #include "rotorid/signal/resample.h"
 
@@ -356,8 +357,7 @@ void AddPose(const PoseRecords& pose, FlightLog* log) {
 }  // namespace
 
 std::string CrazyflieFlightOptions::Validate() const {
-  if (rotor_signal != "auto" && rotor_signal != "rpm" && rotor_signal != "command")
-    return "rotor signal must be auto, rpm or command, got '" + rotor_signal + "'";
+  if (std::string problem = RotorSignalProblem(rotor_signal); !problem.empty()) return problem;
   if (imu_event.empty() || gyro_event.empty() || acc_event.empty()) return "the IMU event names must not be empty";
   return {};
 }

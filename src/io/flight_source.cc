@@ -10,14 +10,11 @@
 #include "rotorid/io/crazyflie_flight.h"
 #include "rotorid/io/flight_csv.h"
 #include "rotorid/io/px4_flight.h"
+#include "rotorid/io/rotor_signal.h"
 
 namespace rotorid {
 
-std::string FlightSourceOptions::Validate() const {
-  if (rotor_signal != "auto" && rotor_signal != "rpm" && rotor_signal != "command")
-    return "rotor signal must be auto, rpm or command, got '" + rotor_signal + "'";
-  return {};
-}
+std::string FlightSourceOptions::Validate() const { return RotorSignalProblem(rotor_signal); }
 
 LogFormat DetectLogFormat(const std::string& path) {
   // Before any reader: a device (/dev/zero), a FIFO or an oversized file is refused by its path.

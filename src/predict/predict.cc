@@ -12,7 +12,7 @@
 #include "rotorid/model/physical_consistency.h"
 #include "rotorid/report/export.h"
 #include "rotorid/report/json.h"
-#include "rotorid/report/refine_json.h"
+#include "rotorid/report/predicted_parameters.h"
 
 namespace rotorid {
 
@@ -77,7 +77,8 @@ internal::FlownModel FlownModelFromReport(const nlohmann::json& report, const st
                                           const Vehicle& vehicle, const std::string& block,
                                           const std::map<std::string, double>& overrides) {
   IdentifiedModel identified = IdentifiedModelFromReport(report, source, vehicle, block);
-  for (const auto& [name, value] : ParameterValuesFromReport(report, source, identified.block, /*predicted=*/true))
+  const PredictedModel predicted = PredictedParameters(report, source, identified.block);
+  for (const auto& [name, value] : predicted.values)
     if (identified.parameters.count(name)) identified.parameters[name].value = value;
   for (const auto& [name, value] : overrides) {
     if (!identified.parameters.count(name))
@@ -86,8 +87,7 @@ internal::FlownModel FlownModelFromReport(const nlohmann::json& report, const st
   }
   std::map<std::string, double> values;
   for (const auto& [name, entry] : identified.parameters) values[name] = entry.value;
-  internal::FlownModel model = internal::FlownModelFromValues(
-      values, identified.block == "refined" ? EffectsFromReport(report) : Effects(), vehicle);
+  internal::FlownModel model = internal::FlownModelFromValues(values, predicted.effects, vehicle);
   model.source = source;
   model.block = identified.block;
   return model;

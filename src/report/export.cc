@@ -12,6 +12,7 @@
 #include "rotorid/ident/identify.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/physical_consistency.h"
+#include "rotorid/report/predicted_parameters.h"
 
 namespace rotorid {
 
@@ -185,7 +186,7 @@ IdentifiedModel IdentifiedModelFromReport(const nlohmann::json& report, const st
   IdentifiedModel model;
   model.source = source;
   model.vehicle = vehicle;
-  model.block = !block.empty() ? block : (report.contains("refined") ? "refined" : "linear");
+  model.block = PredictedBlock(report, block);
   if (!report.contains(model.block) || !report[model.block].contains("parameters"))
     throw Error(source + ": no '" + model.block + ".parameters' (an identify or refine report is needed)");
   for (const auto& [name, entry] : report[model.block]["parameters"].items()) {

@@ -11,6 +11,7 @@
 #include "rotorid/core/text.h"
 #include "rotorid/ident/tls.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/report/predicted_parameters.h"
 
 namespace rotorid::internal {
 
@@ -20,7 +21,7 @@ namespace {
 struct Estimate {
   std::optional<double> value, std_dev;
   bool fixed = true;                     // essential: the flights determine it
-  std::optional<double> predicted_with;  // a parameter they do not fix, estimated beside the others
+  std::optional<double> predicted_with;  // a parameter they do not fix: its profiled estimate, or a value a body allows
 };
 
 // The most complete model of the report: the diagnosis's final model, else the refinement, else the
@@ -41,7 +42,7 @@ Model FromSolution(const std::string& label, const std::vector<std::string>& nam
     const int k = static_cast<int>(it - names.begin());
     Estimate e{solution.chi[k], solution.std.size() > k ? std::optional(solution.std[k]) : std::nullopt,
                solution.essential[k], std::nullopt};
-    if (!e.fixed && PredictsWithProfiled(solution, k)) e.predicted_with = predicted[k];
+    if (!e.fixed && PredictsWithOtherValue(solution, k)) e.predicted_with = predicted[k];
     return e;
   };
   return {label, names, estimate, relative_error_pct};

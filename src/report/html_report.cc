@@ -23,6 +23,7 @@
 #include "rotorid/model/parameters.h"
 #include "rotorid/report/input_json.h"
 #include "rotorid/report/json.h"
+#include "rotorid/report/predicted_parameters.h"
 #include "rotorid/report/refine_json.h"
 #include "rotorid/report/wrench_split.h"
 
@@ -971,9 +972,10 @@ std::vector<ParameterSet> ParameterSetsFromReport(const json& report, const std:
   std::vector<ParameterSet> sets;
   for (const char* block : {"linear", "refined"}) {
     if (!report.contains(block) || report[block].is_null()) continue;
-    ParameterSet set{block, ParameterValuesFromReport(report, source, block), Effects()};
-    if (std::string(block) == "refined") set.effects = EffectsFromReport(report);
-    sets.push_back(std::move(set));
+    // Drawn with the values each model predicts with, as validate's JSON (a discarded inertia at its
+    // predicts_with, not at 0).
+    PredictedModel model = PredictedParameters(report, source, block);
+    sets.push_back({block, std::move(model.values), model.effects});
   }
   return sets;
 }

@@ -6,6 +6,7 @@
 #include "rotorid/ident/body_consistency.h"
 #include "rotorid/io/atomic_file.h"
 #include "rotorid/model/parameters.h"
+#include "rotorid/report/predicted_parameters.h"
 
 namespace rotorid {
 
@@ -43,8 +44,7 @@ nlohmann::json ParametersJson(const std::vector<std::string>& names, const TlsSo
     // A discarded parameter the model still estimates and predicts with (PredictionChi): validate
     // predicts with it too.
     const int i = static_cast<int>(k);
-    if (PredictsWithProfiled(solution, i) || solution.PredictsWithinRange(i))
-      entry["predicts_with"] = JsonNumber(predicted[i]);
+    if (PredictsWithOtherValue(solution, i)) entry["predicts_with"] = JsonNumber(predicted[i]);
     // Not an estimate: a value inside the range a body allows, the estimate lying outside it or absent.
     if (solution.PredictsWithinRange(i)) entry["predicts_within_range"] = true;
     // The values a physical body allows a discarded inertia (the others as predicted with).
@@ -164,8 +164,7 @@ nlohmann::json LinearJson(const IdentificationResult& result) {
 
 std::map<std::string, double> ParameterValuesFromReport(const nlohmann::json& report, const std::string& source,
                                                         const std::string& block, bool predicted) {
-  std::string chosen = block;
-  if (chosen.empty()) chosen = report.contains("refined") && report["refined"].contains("parameters") ? "refined" : "linear";
+  const std::string chosen = PredictedBlock(report, block);
   if (!report.is_object() || !report.contains(chosen) || !report[chosen].is_object() ||
       !report[chosen].contains("parameters") || !report[chosen]["parameters"].is_object())
     throw Error(source + ": not a rotorid identify/refine report (no '" + chosen + ".parameters')");

@@ -136,8 +136,9 @@ ReportSummary WriteHtmlReport(const std::string& dir, const ReportInput& input, 
 std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flights, bool held_out);
 
 // The parameter sets a saved identify/refine report (read from `source`) holds: "linear" (no
-// effects) and "refined" (with its "refined.effects"), each when present. Throws rotorid::Error
-// naming `source` when a present block lacks "parameters" or a parameter its numeric "value".
+// effects) and "refined" (with its "refined.effects"), each when present, with the values each
+// predicts with (PredictedParameters). Throws rotorid::Error naming `source` when a present block
+// lacks "parameters" or a parameter its numeric "value".
 std::vector<ParameterSet> ParameterSetsFromReport(const nlohmann::json& report, const std::string& source);
 
 // The rows of the settings table: the dotted key of every scalar (or array of scalars) of a
