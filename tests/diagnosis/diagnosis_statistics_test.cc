@@ -180,4 +180,44 @@ TEST(HeldOutScoreTest, AStaticMomentThatAFirstMomentBalancesDoesNotPay) {
   EXPECT_LT(fz_ssr, base_ssr - 0.1 * rows);
 }
 
+// The guard of the selection (WorsenedComponents): a component whose held-out residual grows
+// steadily by 20 % is worse beyond its noise; the same growth in one short burst is not significant
+// with the residual's autocorrelation; a steady growth of 3 % is below the 5 % that matters; the
+// other components, which shrink, are never named.
+TEST(HeldOutScoreTest, AComponentWorseBeyondItsNoiseIsNamed) {
+  const int rows = 1000;
+  Eigen::MatrixXd before(rows, 6), wrench = Eigen::MatrixXd::Ones(rows, 6);
+  for (int r = 0; r < rows; ++r)
+    for (int j = 0; j < 6; ++j) before(r, j) = std::sin(0.37 * r + j) + 0.5 * std::sin(2.3 * r + 3 * j);
+  const HeldOutResidual without = OneScoredSegment(before, wrench);
+
+  Eigen::MatrixXd steady = 0.6 * before;
+  steady.col(4) = 1.2 * before.col(4);
+  const std::vector<ComponentWorsening> worse =
+      WorsenedComponents(without, OneScoredSegment(steady, wrench), 5.0, 0.05);
+  ASSERT_EQ(worse.size(), 1u);
+  EXPECT_EQ(worse[0].component, 4);
+  EXPECT_NEAR(worse[0].GrowthPct(), 20.0, 1e-9);
+  EXPECT_GT(worse[0].t_statistic, 10.0);
+
+  // The same 20 % of RMS added by rows 100-139 alone (one slow burst, an autocorrelated piece).
+  Eigen::MatrixXd burst = 0.6 * before;
+  burst.col(4) = before.col(4);
+  const double extra = std::sqrt(0.44 * before.col(4).squaredNorm() / 40.0);
+  for (int r = 100; r < 140; ++r) burst(r, 4) = std::sqrt(before(r, 4) * before(r, 4) + extra * extra);
+  const std::vector<ComponentWorsening> burst_worse =
+      WorsenedComponents(without, OneScoredSegment(burst, wrench), 5.0, 0.05);
+  EXPECT_TRUE(burst_worse.empty()) << burst_worse.front().t_statistic;
+
+  Eigen::MatrixXd slight = 0.6 * before;
+  slight.col(4) = 1.03 * before.col(4);
+  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(slight, wrench), 5.0, 0.05).empty());
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(slight, wrench), 2.0, 0.05).size(), 1u);
+
+  // A component left out of the score (Mz without kd) is not judged.
+  HeldOutResidual unscored = OneScoredSegment(steady, wrench);
+  unscored.scored[0][4] = false;
+  EXPECT_TRUE(WorsenedComponents(without, unscored, 5.0, 0.05).empty());
+}
+
 }  // namespace rotorid::internal
