@@ -224,30 +224,36 @@ PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual&
 }
 
 std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& without, const HeldOutResidual& with,
-                                                   double min_growth_pct, double alpha) {
+                                                   const HeldOutScales& scales, double min_growth_pct, double alpha) {
   if (without.segments.size() != with.segments.size()) throw Error("held-out comparison of different row sets");
+  const Eigen::MatrixXd weights_a = ResidualWeights(without, scales), weights_b = ResidualWeights(with, scales);
   std::vector<ComponentWorsening> worse;
   for (int j = 0; j < kComponents; ++j) {
     std::vector<Eigen::VectorXd> growth;
-    double before_sq = 0.0, after_sq = 0.0, sum = 0.0;
+    double before_sq = 0.0, after_sq = 0.0, weighted_before = 0.0, weighted_after = 0.0, sum = 0.0;
     Eigen::Index n = 0;
     for (size_t s = 0; s < with.segments.size(); ++s) {
       if (!with.scored[s][j] || !without.scored[s][j]) continue;
+      const int f = with.flight[s];
       const Eigen::VectorXd a = without.segments[s].residual.col(j).array().square();
       const Eigen::VectorXd b = with.segments[s].residual.col(j).array().square();
       if (a.size() != b.size()) throw Error("held-out comparison of different row sets");
       before_sq += a.sum();
       after_sq += b.sum();
-      sum += (b - a).sum();
+      const Eigen::VectorXd d = std::pow(weights_b(f, j), 2) * b - std::pow(weights_a(f, j), 2) * a;
+      weighted_before += std::pow(weights_a(f, j), 2) * a.sum();
+      weighted_after += std::pow(weights_b(f, j), 2) * b.sum();
+      sum += d.sum();
       n += a.size();
-      growth.push_back(b - a);
+      growth.push_back(d);
     }
-    if (n < 2 || !(before_sq > 0.0)) continue;
+    if (n < 2 || !(weighted_before > 0.0)) continue;
     ComponentWorsening w;
     w.component = j;
     w.rms_before = std::sqrt(before_sq / static_cast<double>(n));
     w.rms_after = std::sqrt(after_sq / static_cast<double>(n));
-    if (!(w.GrowthPct() > min_growth_pct)) continue;
+    w.growth_pct = 100.0 * (std::sqrt(weighted_after / weighted_before) - 1.0);
+    if (!(w.growth_pct > min_growth_pct)) continue;
     const double mean = sum / static_cast<double>(n);
     double variance = 0.0;
     for (Eigen::VectorXd& d : growth) {

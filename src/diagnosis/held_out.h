@@ -86,21 +86,24 @@ struct PairedComparison {
 PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const HeldOutScales& scales);
 
 // A scored component whose held-out residual grew, on the same rows, beyond what noise makes of it:
-// the RMS before and after (N or N m) and the paired t statistic of the per-row growth of its squared
-// residual (Bartlett long-run variance, as CompareHeldOut). An effect that removes residual in some
+// the RMS before and after (N or N m) and, measured as the score measures it (ResidualWeights: each
+// against its own model's rotor wrench, so that a row group's free scale neither pays nor costs: true
+// thrust scales on a paper flight raise Mz's residual 16 % with kd), the growth and the paired t
+// statistic of the per-row growth of its squared residual (Bartlett long-run variance, as
+// CompareHeldOut). An effect that removes residual in some
 // components and adds it in another is a trade, not an explanation (real jana06: an IMU lever arm
 // took 48 % of Fy and 13 % of Mx and added 21 % to My).
 struct ComponentWorsening {
   int component = 0;
   double rms_before = 0.0;
   double rms_after = 0.0;
+  double growth_pct = 0.0;
   double t_statistic = 0.0;
-  double GrowthPct() const { return rms_before > 0.0 ? 100.0 * (rms_after / rms_before - 1.0) : 0.0; }
 };
 // The components scored in both whose RMS grows by more than min_growth_pct from `without` to `with`
 // with a one-sided p below alpha.
 std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& without, const HeldOutResidual& with,
-                                                   double min_growth_pct, double alpha);
+                                                   const HeldOutScales& scales, double min_growth_pct, double alpha);
 
 // The in-sample score test of the screening: a first-order fit of the effect removes this
 // fraction of the (scaled) residual; F = f / (1 - f) (N - q) / (q a) with N rows and a the

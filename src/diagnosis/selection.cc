@@ -214,18 +214,24 @@ std::vector<Effects> WarmStarts(EffectKind kind, EffectMask selected, const Mode
   return starts;
 }
 
-// "My: residual 4.04e-05 -> 4.87e-05 N m (+20.6 %, t = 5.3) over none": the components `model` makes
-// worse than `reference` (the base model or the linear one) beyond their noise; empty when none.
+// "My: residual 4.04e-05 -> 4.87e-05 N m (+20.6 % against its rotor moment, t = 1.8) over none": the
+// components `model` makes worse than `reference` (the base model or the linear one) beyond their
+// noise, measured as the held-out score measures them; empty when none.
 std::string WorseningStatement(const SelectionContext& context, const ModelRecord& reference,
                                const ModelRecord& model) {
+  const HeldOutResidual& baseline = context.records.at(0).held_out;
+  const int flights =
+      baseline.flight.empty() ? 1 : *std::max_element(baseline.flight.begin(), baseline.flight.end()) + 1;
+  const HeldOutScales scales = BaselineScales(baseline, flights);
   std::ostringstream out;
   for (const ComponentWorsening& w :
-       WorsenedComponents(reference.held_out, model.held_out, context.options.max_component_growth_pct,
+       WorsenedComponents(reference.held_out, model.held_out, scales, context.options.max_component_growth_pct,
                           context.options.component_growth_alpha))
     out << (out.tellp() > 0 ? "; " : "") << kWrenchComponentNames[static_cast<size_t>(w.component)] << ": residual "
         << std::scientific << std::setprecision(2) << w.rms_before << " -> " << w.rms_after
-        << (w.component < 3 ? " N" : " N m") << std::fixed << std::setprecision(1) << " (+" << w.GrowthPct()
-        << " %, t = " << w.t_statistic << ") over " << Join(KindsOf(reference.mask));
+        << (w.component < 3 ? " N" : " N m") << std::fixed << std::setprecision(1) << " (+" << w.growth_pct
+        << " % against its rotor " << (w.component < 3 ? "force" : "moment") << ", t = " << w.t_statistic << ") over "
+        << Join(KindsOf(reference.mask));
   return out.str();
 }
 
