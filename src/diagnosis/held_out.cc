@@ -224,7 +224,8 @@ PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual&
 }
 
 std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& without, const HeldOutResidual& with,
-                                                   const HeldOutScales& scales, double min_growth_pct, double alpha) {
+                                                   const HeldOutScales& scales, const ComponentVector& noise_share,
+                                                   double min_growth_pct, double alpha) {
   if (without.segments.size() != with.segments.size()) throw Error("held-out comparison of different row sets");
   const Eigen::MatrixXd weights_a = ResidualWeights(without, scales), weights_b = ResidualWeights(with, scales);
   std::vector<ComponentWorsening> worse;
@@ -253,7 +254,12 @@ std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& withou
     w.rms_before = std::sqrt(before_sq / static_cast<double>(n));
     w.rms_after = std::sqrt(after_sq / static_cast<double>(n));
     w.growth_pct = 100.0 * (std::sqrt(weighted_after / weighted_before) - 1.0);
-    if (!(w.growth_pct > min_growth_pct)) continue;
+    // The noise in each model's own weights: the raw noise sum of squares times its mean weight.
+    const double noise_before = noise_share[j] * weighted_before;
+    const double noise_after = after_sq > 0.0 ? noise_share[j] * before_sq * weighted_after / after_sq : 0.0;
+    const double error_before = std::sqrt(std::max(0.0, weighted_before - noise_before));
+    const double error_after = std::sqrt(std::max(0.0, weighted_after - noise_after));
+    if (!(weighted_after >= 2.0 * noise_after && error_after > (1.0 + min_growth_pct / 100.0) * error_before)) continue;
     const double mean = sum / static_cast<double>(n);
     double variance = 0.0;
     for (Eigen::VectorXd& d : growth) {

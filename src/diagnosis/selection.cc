@@ -223,10 +223,15 @@ std::string WorseningStatement(const SelectionContext& context, const ModelRecor
   const int flights =
       baseline.flight.empty() ? 1 : *std::max_element(baseline.flight.begin(), baseline.flight.end()) + 1;
   const HeldOutScales scales = BaselineScales(baseline, flights);
+  ComponentVector noise_share = ComponentVector::Zero();  // of the reference's residual (floor / gap)^2
+  for (int j = 0; j < kNumWrenchComponents; ++j)
+    if (const auto& floor = reference.gap.noise_floor_pct[j], &gap = reference.gap.gap_pct[j];
+        floor && gap && *gap > 0.0)
+      noise_share[j] = std::min(1.0, std::pow(*floor / *gap, 2));
   std::ostringstream out;
   for (const ComponentWorsening& w :
-       WorsenedComponents(reference.held_out, model.held_out, scales, context.options.max_component_growth_pct,
-                          context.options.component_growth_alpha))
+       WorsenedComponents(reference.held_out, model.held_out, scales, noise_share,
+                          context.options.max_component_growth_pct, context.options.component_growth_alpha))
     out << (out.tellp() > 0 ? "; " : "") << kWrenchComponentNames[static_cast<size_t>(w.component)] << ": residual "
         << std::scientific << std::setprecision(2) << w.rms_before << " -> " << w.rms_after
         << (w.component < 3 ? " N" : " N m") << std::fixed << std::setprecision(1) << " (+" << w.growth_pct

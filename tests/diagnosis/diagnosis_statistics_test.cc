@@ -195,11 +195,12 @@ TEST(HeldOutScoreTest, AComponentWorseBeyondItsNoiseIsNamed) {
     }
   const HeldOutResidual without = OneScoredSegment(before, wrench);
   const HeldOutScales scales = BaselineScales(without, 1);
+  const ComponentVector no_noise = ComponentVector::Zero();
 
   Eigen::MatrixXd steady = 0.6 * before;
   steady.col(4) = 1.2 * before.col(4);
   const std::vector<ComponentWorsening> worse =
-      WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, 5.0, 0.05);
+      WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, no_noise, 5.0, 0.05);
   ASSERT_EQ(worse.size(), 1u);
   EXPECT_EQ(worse[0].component, 4);
   EXPECT_NEAR(worse[0].growth_pct, 20.0, 1e-9);
@@ -211,25 +212,35 @@ TEST(HeldOutScoreTest, AComponentWorseBeyondItsNoiseIsNamed) {
   const double extra = std::sqrt(0.44 * before.col(4).squaredNorm() / 40.0);
   for (int r = 100; r < 140; ++r) burst(r, 4) = std::sqrt(before(r, 4) * before(r, 4) + extra * extra);
   const std::vector<ComponentWorsening> burst_worse =
-      WorsenedComponents(without, OneScoredSegment(burst, wrench), scales, 5.0, 0.05);
+      WorsenedComponents(without, OneScoredSegment(burst, wrench), scales, no_noise, 5.0, 0.05);
   EXPECT_TRUE(burst_worse.empty()) << burst_worse.front().t_statistic;
 
   Eigen::MatrixXd slight = 0.6 * before;
   slight.col(4) = 1.03 * before.col(4);
-  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(slight, wrench), scales, 5.0, 0.05).empty());
-  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(slight, wrench), scales, 2.0, 0.05).size(), 1u);
+  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(slight, wrench), scales, no_noise, 5.0, 0.05).empty());
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(slight, wrench), scales, no_noise, 2.0, 0.05).size(), 1u);
 
   // Mz's residual 16 % larger with its rotor moment 16 % larger: kd larger with true thrust scales.
   Eigen::MatrixXd scaled = 0.6 * before, scaled_wrench = wrench;
   scaled.col(5) = 1.16 * before.col(5);
   scaled_wrench.col(5) *= 1.16;
-  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(scaled, scaled_wrench), scales, 5.0, 0.05).empty());
-  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(scaled, wrench), scales, 5.0, 0.05).size(), 1u);
+  EXPECT_TRUE(
+      WorsenedComponents(without, OneScoredSegment(scaled, scaled_wrench), scales, no_noise, 5.0, 0.05).empty());
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(scaled, wrench), scales, no_noise, 5.0, 0.05).size(), 1u);
+
+  // The steady 20 % growth of My with 60 % of its residual noise: its model error grows from
+  // sqrt(0.4) to sqrt(1.44 - 0.6) of the old RMS (+45 %) and ends above the noise: worse.
+  // With 99 % noise the residual ends at 1.2 / sqrt(0.99) of its floor, within sqrt(2): not worse.
+  ComponentVector noisy = ComponentVector::Zero();
+  noisy[4] = 0.6;
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, noisy, 5.0, 0.05).size(), 1u);
+  noisy[4] = 0.99;
+  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, noisy, 5.0, 0.05).empty());
 
   // A component left out of the score (Mz without kd) is not judged.
   HeldOutResidual unscored = OneScoredSegment(steady, wrench);
   unscored.scored[0][4] = false;
-  EXPECT_TRUE(WorsenedComponents(without, unscored, scales, 5.0, 0.05).empty());
+  EXPECT_TRUE(WorsenedComponents(without, unscored, scales, no_noise, 5.0, 0.05).empty());
 }
 
 }  // namespace rotorid::internal
