@@ -46,6 +46,9 @@ std::string DiagnosisOptions::Validate() const {
   if (max_effects < 0) return "max_effects must not be negative";
   if (!(screen_fraction >= 0.0 && screen_fraction <= 1.0)) return "screen_fraction must lie in [0, 1]";
   if (!(rival_fraction >= 0.0 && rival_fraction <= 1.0)) return "rival_fraction must lie in [0, 1]";
+  if (!(max_component_growth_pct >= 0.0)) return "max_component_growth_pct must not be negative";
+  if (!(component_growth_alpha > 0.0 && component_growth_alpha < 1.0))
+    return "component_growth_alpha must lie in (0, 1)";
   if (!(unexplained_floor_ratio >= 1.0)) return "unexplained_floor_ratio must be at least 1";
   if (!(unexplained_min_pct >= 0.0)) return "unexplained_min_pct must not be negative";
   if (const std::string problem = delay_search.Validate(); !problem.empty()) return problem;

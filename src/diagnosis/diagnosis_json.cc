@@ -169,6 +169,8 @@ json DiagnosisOptionsJson(const DiagnosisOptions& o) {
           {"max_effects", o.max_effects},
           {"screen_fraction", o.screen_fraction},
           {"rival_fraction", o.rival_fraction},
+          {"max_component_growth_pct", o.max_component_growth_pct},
+          {"component_growth_alpha", o.component_growth_alpha},
           {"delay_search_s", {o.delay_search.min_s, o.delay_search.max_s, o.delay_search.step_s}},
           {"refine_max_iterations", o.refine_max_iterations},
           {"reselect_essential", o.reselect_essential},

@@ -81,6 +81,160 @@ std::vector<std::string> EffectLabels(EffectKind kind, const Vehicle& vehicle) {
   return kind->Labels(kind->Dimension(vehicle));
 }
 
+namespace {
+
+// What a linearisation gathers over its flights beside the rows themselves: each scored component's
+// scaled residual series (for the autocorrelation factor) and each effect column's signature in
+// physical units, in the scored components and in the others.
+struct LinearizationSums {
+  std::vector<std::vector<Eigen::VectorXd>> component_series =
+      std::vector<std::vector<Eigen::VectorXd>>(kNumWrenchComponents);
+  Eigen::VectorXd signature_scored, signature_unscored;
+};
+
+// One flight's rows at the linearisation point: the residual and the rotor wrench per component
+// (rows) and row sample (columns), and the kept row samples' parameter Jacobian (unscaled) written
+// into out->parameter_jacobian at `offset`.
+struct FlightRows {
+  Eigen::MatrixXd rho;
+  Eigen::MatrixXd rotor_wrench;
+};
+FlightRows ParameterRows(const ProcessedFlight& flight, const EffectRows& values, const Eigen::VectorXd& chi_t,
+                         const std::vector<std::string>& free_parameters, int stride, Eigen::Index offset,
+                         EffectLinearization* out) {
+  const Eigen::Index p = static_cast<Eigen::Index>(free_parameters.size());
+  const int samples = flight.num_rows_samples();
+  FlightRows rows{Eigen::MatrixXd(kNumWrenchComponents, samples), Eigen::MatrixXd(kNumWrenchComponents, samples)};
+  std::vector<int> column_of(static_cast<size_t>(p));
+  for (Eigen::Index c = 0; c < p; ++c) column_of[static_cast<size_t>(c)] = ColumnOf(free_parameters[c], flight);
+  const EffectRows::PassValues<double> pass = values.Pass<double>();
+  for (int r = 0; r < samples; ++r) {
+    const Eigen::Matrix<double, 6, kNumIdimColumns> w = values.Rows<double>(r, pass);
+    rows.rho.col(r) = w * chi_t;
+    rows.rotor_wrench.col(r) = w.leftCols<2>() * chi_t.head<2>();
+    if (r % stride != 0) continue;
+    for (Eigen::Index c = 0; c < p; ++c)
+      if (const int column = column_of[static_cast<size_t>(c)]; column >= 0)
+        out->parameter_jacobian.block<kNumWrenchComponents, 1>(offset + kNumWrenchComponents * (r / stride), c) =
+            w.col(column);
+  }
+  return rows;
+}
+
+// Per-component scale of one flight's rows: the residual's RMS in this flight; unmodelled components
+// (no rotor term) get no weight (an infinite scale) and are noted in out->unscored_components.
+Eigen::Matrix<double, kNumWrenchComponents, 1> ComponentScales(const FlightRows& rows,
+                                                               std::array<bool, kNumWrenchComponents>* scored,
+                                                               EffectLinearization* out, LinearizationSums* sums) {
+  const Eigen::Index samples = rows.rho.cols();
+  Eigen::Matrix<double, kNumWrenchComponents, 1> scale;
+  for (int j = 0; j < kNumWrenchComponents; ++j) {
+    double sum = 0.0, rotor_sum = 0.0;
+    for (Eigen::Index r = 0; r < samples; ++r) {
+      sum += rows.rho(j, r) * rows.rho(j, r);
+      rotor_sum += std::pow(rows.rotor_wrench(j, r), 2);
+    }
+    const double rms = std::sqrt(sum / static_cast<double>(std::max<Eigen::Index>(1, samples)));
+    scale[j] = rms > 0.0 ? rms : 1.0;
+    (*scored)[static_cast<size_t>(j)] = !(j >= 2 && rotor_sum == 0.0);
+    if (!(*scored)[static_cast<size_t>(j)]) {
+      scale[j] = std::numeric_limits<double>::infinity();
+      if (std::find(out->unscored_components.begin(), out->unscored_components.end(), j) ==
+          out->unscored_components.end())
+        out->unscored_components.push_back(j);
+    } else {
+      out->scored_rows += samples;
+      sums->component_series[j].push_back(rows.rho.row(j).transpose() / scale[j]);
+    }
+  }
+  return scale;
+}
+
+// The effect columns of one flight's kept row samples at `offset`: d rho / d effect by the
+// refinement's own Jets (EffectRows), then scaled as the residual. Where an effect acts is measured in
+// physical units, forces times the arm (N m): an unscored component's residual is no scale for it
+// (with kd, I_zz and the products discarded, Mz's residual is almost empty).
+void EffectColumnsOfFlight(const ProcessedFlight& flight, const EffectRows& model, const Eigen::VectorXd& chi_t,
+                           int stride, Eigen::Index kept, Eigen::Index offset,
+                           const Eigen::Matrix<double, kNumWrenchComponents, 1>& scale,
+                           const std::array<bool, kNumWrenchComponents>& scored, int num_threads,
+                           EffectLinearization* out, LinearizationSums* sums) {
+  const Eigen::Index e = static_cast<Eigen::Index>(out->labels.size());
+  const double arm = flight.vehicle.MeanArm() > 0.0 ? flight.vehicle.MeanArm() : 1.0;
+  const size_t coordinates = model.coordinates().size();
+  std::vector<EffectRows::PassValues<WideImuJet>> passes;
+  for (size_t first = 0; first < coordinates; first += kWideImuJetSize) passes.push_back(model.Pass<WideImuJet>(first));
+  // The Jets of the kept row samples, in parallel: each writes its own rows, unscaled.
+  ParallelFor(static_cast<int>(kept), num_threads, [&](int k) {
+    for (const EffectRows::PassValues<WideImuJet>& jet_pass : passes) {
+      const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows = model.Rows<WideImuJet>(stride * k, jet_pass);
+      for (int j = 0; j < kNumWrenchComponents; ++j) {
+        WideImuJet rho_jet(0.0);
+        for (int c = 0; c < kNumIdimColumns; ++c) rho_jet += jet_rows(j, c) * chi_t[c];
+        for (size_t c = jet_pass.first; c < jet_pass.last; ++c)
+          out->effect_jacobian(offset + kNumWrenchComponents * k + j, static_cast<Eigen::Index>(c)) =
+              rho_jet.v[c - jet_pass.first];
+      }
+    }
+  });
+  for (Eigen::Index k = 0; k < kept; ++k)
+    for (int j = 0; j < kNumWrenchComponents; ++j)
+      for (Eigen::Index column = 0; column < e; ++column) {
+        double& derivative = out->effect_jacobian(offset + kNumWrenchComponents * k + j, column);
+        const double signature = std::pow(derivative * (j < 3 ? arm : 1.0), 2);
+        (scored[static_cast<size_t>(j)] ? sums->signature_scored : sums->signature_unscored)[column] += signature;
+        derivative /= scale[j];
+      }
+}
+
+// One flight's rows of the linearisation at `offset`; returns the number of rows written.
+Eigen::Index AddFlightRows(const ProcessedFlight& flight, const std::map<std::string, double>& parameters,
+                           const std::vector<std::string>& free_parameters, const Effects& effects,
+                           const std::vector<EffectKind>& kinds, const std::vector<EffectKind>& rotor_kinds, int stride,
+                           Eigen::Index offset, int num_threads, EffectLinearization* out, LinearizationSums* sums) {
+  const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
+  const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, rotor_kinds);
+  // The rows' values as BuildIdimMatrixWithEffects gives them (no free coordinate), one row
+  // sample at a time: the residual of every row sample, without the flight's W.
+  const EffectRows values(&flight, effects, {}, &rotor);
+  const FlightRows rows = ParameterRows(flight, values, chi_t, free_parameters, stride, offset, out);
+  std::array<bool, kNumWrenchComponents> scored{};
+  const Eigen::Matrix<double, kNumWrenchComponents, 1> scale = ComponentScales(rows, &scored, out, sums);
+  const Eigen::Index kept = (flight.num_rows_samples() + stride - 1) / stride;
+  for (Eigen::Index k = 0; k < kept; ++k)
+    for (int j = 0; j < kNumWrenchComponents; ++j) {
+      const Eigen::Index i = offset + kNumWrenchComponents * k + j;
+      out->row_component[i] = j;
+      out->residual[i] = rows.rho(j, stride * k) / scale[j];
+      out->parameter_jacobian.row(i) /= scale[j];
+    }
+  const EffectRows model(&flight, effects, kinds, &rotor);
+  EffectColumnsOfFlight(flight, model, chi_t, stride, kept, offset, scale, scored, num_threads, out, sums);
+  return kNumWrenchComponents * kept;
+}
+
+// The normal equations of the scaled rows, the autocorrelation factor and where the effects act.
+// `weight`: all / kept row samples, so that the kept rows stand for all.
+void FinishLinearization(const LinearizationSums& sums, double weight, EffectLinearization* out) {
+  out->effect_unscored_share =
+      sums.signature_unscored.cwiseQuotient((sums.signature_scored + sums.signature_unscored).cwiseMax(1e-300));
+  double factor = 0.0;
+  int scored_components = 0;
+  for (int j = 0; j < kNumWrenchComponents; ++j) {
+    if (sums.component_series[j].empty()) continue;
+    factor += AutocorrelationFactor(sums.component_series[j]);
+    ++scored_components;
+  }
+  out->autocorrelation_factor = scored_components > 0 ? factor / scored_components : 1.0;
+  Eigen::MatrixXd j(out->residual.size(), out->parameter_jacobian.cols() + out->effect_jacobian.cols());
+  j << out->parameter_jacobian, out->effect_jacobian;
+  out->gram = weight * (j.transpose() * j);
+  out->gram_residual = weight * (j.transpose() * out->residual);
+  out->residual_ssr = weight * out->residual.squaredNorm();
+}
+
+}  // namespace
+
 EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights,
                                      const std::map<std::string, double>& parameters,
                                      const std::vector<std::string>& free_parameters, const Effects& given,
@@ -106,120 +260,23 @@ EffectLinearization LinearizeEffects(const std::vector<ProcessedFlight>& flights
   Eigen::Index kept_samples = 0;
   for (const ProcessedFlight& f : flights) kept_samples += (f.num_rows_samples() + stride - 1) / stride;
   const Eigen::Index total_rows = kNumWrenchComponents * kept_samples;
-  const Eigen::Index p = static_cast<Eigen::Index>(free_parameters.size());
   const Eigen::Index e = static_cast<Eigen::Index>(out.labels.size());
   out.residual.resize(total_rows);
-  out.parameter_jacobian.setZero(total_rows, p);
+  out.parameter_jacobian.setZero(total_rows, static_cast<Eigen::Index>(free_parameters.size()));
   out.effect_jacobian.setZero(total_rows, e);
   out.row_component.resize(total_rows);
-  std::vector<std::vector<Eigen::VectorXd>> component_series(kNumWrenchComponents);
-  Eigen::VectorXd signature_scored = Eigen::VectorXd::Zero(e), signature_unscored = Eigen::VectorXd::Zero(e);
-
-  Eigen::Index offset = 0;
+  LinearizationSums sums;
+  sums.signature_scored = sums.signature_unscored = Eigen::VectorXd::Zero(e);
   std::vector<EffectKind> rotor_kinds;
   for (EffectKind kind : kinds)
     if (kind->stage() == EffectStage::kRotorSignal) rotor_kinds.push_back(kind);
-  for (const ProcessedFlight& flight : flights) {
-    const Eigen::VectorXd chi_t = FlightChiT(flight, parameters);
-    const EffectiveRotor rotor = EffectiveRotorAtRows(flight, effects, rotor_kinds);
-    // The rows' values as BuildIdimMatrixWithEffects gives them (no free coordinate), one row
-    // sample at a time: the residual of every row sample, without the flight's W.
-    const EffectRows values(&flight, effects, {}, &rotor);
-    const int samples = flight.num_rows_samples();
-    Eigen::MatrixXd rho(kNumWrenchComponents, samples);  // component x row sample
-    Eigen::MatrixXd rotor_wrench(kNumWrenchComponents, samples);
-    std::vector<int> column_of(static_cast<size_t>(p));
-    for (Eigen::Index c = 0; c < p; ++c) column_of[static_cast<size_t>(c)] = ColumnOf(free_parameters[c], flight);
-    const Eigen::Index kept = (samples + stride - 1) / stride;
-    const EffectRows::PassValues<double> pass = values.Pass<double>();
-    for (int r = 0; r < samples; ++r) {
-      const Eigen::Matrix<double, 6, kNumIdimColumns> w = values.Rows<double>(r, pass);
-      rho.col(r) = w * chi_t;
-      rotor_wrench.col(r) = w.leftCols<2>() * chi_t.head<2>();
-      if (r % stride != 0) continue;
-      for (Eigen::Index c = 0; c < p; ++c)
-        if (const int column = column_of[static_cast<size_t>(c)]; column >= 0)
-          out.parameter_jacobian.block<kNumWrenchComponents, 1>(offset + kNumWrenchComponents * (r / stride), c) =
-              w.col(column);
-    }
-    // Per-component scale: the residual's RMS in this flight; unmodelled components get no weight.
-    Eigen::Matrix<double, kNumWrenchComponents, 1> scale;
-    std::array<bool, kNumWrenchComponents> scored{};
-    for (int j = 0; j < kNumWrenchComponents; ++j) {
-      double sum = 0.0, rotor_sum = 0.0;
-      for (int r = 0; r < samples; ++r) {
-        sum += rho(j, r) * rho(j, r);
-        rotor_sum += std::pow(rotor_wrench(j, r), 2);
-      }
-      const double rms = std::sqrt(sum / std::max(1, samples));
-      scale[j] = rms > 0.0 ? rms : 1.0;
-      scored[static_cast<size_t>(j)] = !(j >= 2 && rotor_sum == 0.0);
-      if (!scored[static_cast<size_t>(j)]) {
-        scale[j] = std::numeric_limits<double>::infinity();
-        if (std::find(out.unscored_components.begin(), out.unscored_components.end(), j) ==
-            out.unscored_components.end())
-          out.unscored_components.push_back(j);
-      } else {
-        out.scored_rows += samples;
-        component_series[j].push_back(rho.row(j).transpose() / scale[j]);
-      }
-    }
-    for (Eigen::Index k = 0; k < kept; ++k)
-      for (int j = 0; j < kNumWrenchComponents; ++j) {
-        const Eigen::Index i = offset + kNumWrenchComponents * k + j;
-        out.row_component[i] = j;
-        out.residual[i] = rho(j, stride * k) / scale[j];
-        out.parameter_jacobian.row(i) /= scale[j];
-      }
-    // The effect columns: d rho / d effect by the refinement's own Jets (EffectRows). Where an effect
-    // acts is measured in physical units, forces times the arm (N m): an unscored component's residual
-    // is no scale for it (with kd, I_zz and the products discarded, Mz's residual is almost empty).
-    const double arm = flight.vehicle.MeanArm() > 0.0 ? flight.vehicle.MeanArm() : 1.0;
-    const EffectRows model(&flight, effects, kinds, &rotor);
-    const size_t coordinates = model.coordinates().size();
-    std::vector<EffectRows::PassValues<WideImuJet>> passes;
-    for (size_t first = 0; first < coordinates; first += kWideImuJetSize)
-      passes.push_back(model.Pass<WideImuJet>(first));
-    // The Jets of the kept row samples, in parallel: each writes its own rows, unscaled.
-    ParallelFor(static_cast<int>(kept), num_threads, [&](int k) {
-      for (const EffectRows::PassValues<WideImuJet>& jet_pass : passes) {
-        const Eigen::Matrix<WideImuJet, 6, kNumIdimColumns> jet_rows = model.Rows<WideImuJet>(stride * k, jet_pass);
-        for (int j = 0; j < kNumWrenchComponents; ++j) {
-          WideImuJet rho_jet(0.0);
-          for (int c = 0; c < kNumIdimColumns; ++c) rho_jet += jet_rows(j, c) * chi_t[c];
-          for (size_t c = jet_pass.first; c < jet_pass.last; ++c)
-            out.effect_jacobian(offset + kNumWrenchComponents * k + j, static_cast<Eigen::Index>(c)) =
-                rho_jet.v[c - jet_pass.first];
-        }
-      }
-    });
-    for (Eigen::Index k = 0; k < kept; ++k)
-      for (int j = 0; j < kNumWrenchComponents; ++j)
-        for (Eigen::Index column = 0; column < e; ++column) {
-          double& derivative = out.effect_jacobian(offset + kNumWrenchComponents * k + j, column);
-          const double signature = std::pow(derivative * (j < 3 ? arm : 1.0), 2);
-          (scored[static_cast<size_t>(j)] ? signature_scored : signature_unscored)[column] += signature;
-          derivative /= scale[j];
-        }
-    offset += kNumWrenchComponents * kept;
-  }
-  out.effect_unscored_share =
-      signature_unscored.cwiseQuotient((signature_scored + signature_unscored).cwiseMax(1e-300));
-  double factor = 0.0;
-  int scored_components = 0;
-  for (int j = 0; j < kNumWrenchComponents; ++j) {
-    if (component_series[j].empty()) continue;
-    factor += AutocorrelationFactor(component_series[j]);
-    ++scored_components;
-  }
-  out.autocorrelation_factor = scored_components > 0 ? factor / scored_components : 1.0;
-  Eigen::MatrixXd j(out.residual.size(), p + e);
-  j << out.parameter_jacobian, out.effect_jacobian;
+  Eigen::Index offset = 0;
+  for (const ProcessedFlight& flight : flights)
+    offset += AddFlightRows(flight, parameters, free_parameters, effects, kinds, rotor_kinds, stride, offset,
+                            num_threads, &out, &sums);
   // The kept rows stand for all: sums over them scaled by all / kept row samples.
-  const double weight = static_cast<double>(all_samples) / static_cast<double>(std::max<Eigen::Index>(1, kept_samples));
-  out.gram = weight * (j.transpose() * j);
-  out.gram_residual = weight * (j.transpose() * out.residual);
-  out.residual_ssr = weight * out.residual.squaredNorm();
+  FinishLinearization(
+      sums, static_cast<double>(all_samples) / static_cast<double>(std::max<Eigen::Index>(1, kept_samples)), &out);
   return out;
 }
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "diagnosis/verdict_text.h"
 #include "refine/grid_search.h"
@@ -170,6 +172,7 @@ std::vector<EffectKind> ScreenCandidates(const AllDataModel& all_data, const Dia
     TestedCandidate& t = (*tested)[kind];
     t.step = step;
     t.base = selected;
+    t.worsens.clear();
     ScreenCandidate(kind, linearization, point, base_shrink, all_data.linear, options, &t);
   }
   return CandidatesWorthRefining(remaining, *tested, options);
@@ -211,10 +214,37 @@ std::vector<Effects> WarmStarts(EffectKind kind, EffectMask selected, const Mode
   return starts;
 }
 
+// "My: residual 4.04e-05 -> 4.87e-05 N m (+20.6 % against its rotor moment, t = 1.8) over none": the
+// components `model` makes worse than `reference` (the base model or the linear one) beyond their
+// noise, measured as the held-out score measures them; empty when none.
+std::string WorseningStatement(const SelectionContext& context, const ModelRecord& reference,
+                               const ModelRecord& model) {
+  const HeldOutResidual& baseline = context.records.at(0).held_out;
+  const int flights =
+      baseline.flight.empty() ? 1 : *std::max_element(baseline.flight.begin(), baseline.flight.end()) + 1;
+  const HeldOutScales scales = BaselineScales(baseline, flights);
+  ComponentVector noise_share = ComponentVector::Zero();  // of the reference's residual (floor / gap)^2
+  for (int j = 0; j < kNumWrenchComponents; ++j)
+    if (const auto& floor = reference.gap.noise_floor_pct[j], &gap = reference.gap.gap_pct[j];
+        floor && gap && *gap > 0.0)
+      noise_share[j] = std::min(1.0, std::pow(*floor / *gap, 2));
+  std::ostringstream out;
+  for (const ComponentWorsening& w :
+       WorsenedComponents(reference.held_out, model.held_out, scales, noise_share,
+                          context.options.max_component_growth_pct, context.options.component_growth_alpha))
+    out << (out.tellp() > 0 ? "; " : "") << kWrenchComponentNames[static_cast<size_t>(w.component)] << ": residual "
+        << std::scientific << std::setprecision(2) << w.rms_before << " -> " << w.rms_after
+        << (w.component < 3 ? " N" : " N m") << std::fixed << std::setprecision(1) << " (+" << w.growth_pct
+        << " % against its rotor " << (w.component < 3 ? "force" : "moment") << ", t = " << w.t_statistic << ") over "
+        << Join(KindsOf(reference.mask));
+  return out.str();
+}
+
 // Tests each refined candidate on top of `base` and keeps its record; marks the significant ones whose
 // fold-mean value is outside the physical range (they buy their shrink with it, absorbing something
-// else) or too small to matter; returns the index of the plausible one with the smallest held-out
-// residual (-1 when there is none).
+// else) or too small to matter, and those that make a held-out component worse (WorseningStatement
+// over the base and the linear model); returns the index of the plausible, non-worsening one with the
+// smallest held-out residual (-1 when there is none).
 int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fit, const ModelRecord& base,
                  EffectMask selected, std::vector<ModelRecord> fitted, TestedCandidates* tested,
                  std::vector<std::pair<EffectKind, EffectTest>>* refined) {
@@ -234,10 +264,15 @@ int JudgeRefined(SelectionContext* context, const std::vector<EffectKind>& to_fi
     if (t.step == 1) t.alone = t.test;
     if (t.test.significant)
       t.Judge(to_fit[c], MeanFoldEffect(record, to_fit[c]), t.linearized_std, context->vehicle, /*on_bound=*/false);
+    if (t.test.significant && !t.Rejected()) {
+      t.worsens = WorseningStatement(*context, base, record);
+      if (t.worsens.empty() && selected != 0) t.worsens = WorseningStatement(*context, context->records.at(0), record);
+    }
     const double ssr = record.gap.whitened_ssr;
     context->records[record.mask] = std::move(record);
     if (t.Rejected()) continue;  // neither selected nor a rival of the selected one
     refined->emplace_back(to_fit[c], t.test);
+    if (!t.worsens.empty()) continue;  // a rival, but not the one selected
     if (best < 0 || ssr < best_ssr) {
       best = static_cast<int>(c);
       best_ssr = ssr;

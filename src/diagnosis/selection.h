@@ -125,6 +125,10 @@ struct TestedCandidate {
   // (EffectDescriptor::Negligible). Either way never selected, not tested again.
   std::string implausible;
   std::string negligible;
+  // Significant when refined at `step`, but a scored held-out component got worse beyond its noise
+  // (WorsenedComponents) over the base model or the linear one: which and by how much. Not selected
+  // at that step; tested again on top of the next one.
+  std::string worsens;
   // A kept timing effect refitted at half the low-pass cut-off, where it held: both values.
   std::string held_at_half_cutoff;
   bool Rejected() const { return !implausible.empty() || !negligible.empty(); }

@@ -93,6 +93,10 @@ std::string VerdictNote(const EffectVerdict& v, const DiagnosisOptions& options,
     note << "negligible: too small to matter; " << v.negligible << " (its held-out shrink of " << std::fixed
          << std::setprecision(1) << v.test.shrink_pct << " % on top of " << Join(v.tested_on_top_of)
          << " is significant, but not an effect worth modelling: not selected)";
+  } else if (v.status == "worsens a component") {
+    note << "worsens a component held out: " << v.worsens << " (its held-out shrink of " << std::fixed
+         << std::setprecision(1) << v.test.shrink_pct << " % on top of " << Join(v.tested_on_top_of)
+         << " trades that component for others rather than explaining the gap: not selected)";
   } else if (v.dropped_as_redundant) {
     note << "selected early, but not significant once " << Join(v.tested_on_top_of) << " were in (held-out shrink "
          << std::setprecision(2) << std::fixed << v.test.shrink_pct << " %): dropped as redundant";

@@ -142,6 +142,10 @@ EffectVerdict VerdictOf(EffectKind kind, const SelectionContext& context, const 
     v.implausible = t->second.implausible;
     v.negligible = t->second.negligible;
   }
+  if (tested && !t->second.worsens.empty() && !v.selected && !t->second.Rejected()) {
+    v.status = "worsens a component";
+    v.worsens = t->second.worsens;
+  }
   if (tested && v.selected) v.held_at_half_cutoff = t->second.held_at_half_cutoff;
   if (v.selected) v.unstated_reference = kind->UnstatedReference(v.value, context.vehicle);
   ApplyKeptStep(outcome.steps, &v);

@@ -417,9 +417,9 @@ Eigen::VectorXd DriveMotors(const internal::BatteryDrive& battery, const Eigen::
   return speed;
 }
 
-}  // namespace
-
-SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
+// The inputs Simulate refuses: invalid options or vehicle, an effect of the wrong size, kt or kd not
+// positive, an external force the controller's trim cannot fly against.
+void ValidateSimulation(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error("simulation options: " + problem);
   if (const std::string problem = vehicle.Validate(); !problem.empty()) throw Error("simulated vehicle: " + problem);
   for (EffectKind kind : AllEffects())
@@ -430,28 +430,30 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   if (!(truth.rotor.kt > 0.0) || !(truth.rotor.kd > 0.0) || !std::isfinite(truth.rotor.kt) ||
       !std::isfinite(truth.rotor.kd))
     throw Error("simulated vehicle: kt and kd must be positive");
-  const Effects& effects = options.effects;
-  // The rotor-signal effects as the physics sees them: a delay of the command and a first-order lag.
-  double command_latency_s = 0.0, motor_time_constant_s = 0.0;
-  for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal)) {
-    command_latency_s += kind->SimulatedCommandDelay(effects.Get(kind));
-    motor_time_constant_s += kind->SimulatedMotorTimeConstant(effects.Get(kind));
-  }
-  // The sensor effects in chain order, from the body towards the log, and the delay of the
-  // accelerometer stream behind the gyro's (applied to the whole series after the flight).
-  const EffectChain sensor = ActingEffects(effects, EffectStage::kImuSensor);
-  double accelerometer_delay_s = 0.0;
-  for (size_t j = 0; j < sensor.kinds.size(); ++j)
-    accelerometer_delay_s += sensor.kinds[j]->SimulatedAccelerometerDelay(sensor.values[j]);
   const double g = options.gravity_mps2;
   // Beyond this the controller's hover trim, made without it, is too far off to fly the references.
   if (options.external_force.world_n.norm() > 0.3 * truth.mass_kg * g)
     throw Error("simulation options: the external force (" + FormatNumber(options.external_force.world_n.norm()) +
                 " N) must not exceed 0.3 m g = " + FormatNumber(0.3 * truth.mass_kg * g) + " N");
-  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
-                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force);
+}
 
-  // The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
+// The rotor-signal effects as the physics sees them: a delay of the command and a first-order lag.
+struct RotorSignalTiming {
+  double command_latency_s = 0.0;
+  double motor_time_constant_s = 0.0;
+};
+RotorSignalTiming RotorSignalTimingOf(const Effects& effects) {
+  RotorSignalTiming timing;
+  for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal)) {
+    timing.command_latency_s += kind->SimulatedCommandDelay(effects.Get(kind));
+    timing.motor_time_constant_s += kind->SimulatedMotorTimeConstant(effects.Get(kind));
+  }
+  return timing;
+}
+
+// The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
+internal::ControllerModel ControllerModelOf(const Vehicle& vehicle, const VehicleParameters& truth,
+                                            const SimulationOptions& options) {
   RandomStream controller_random(options.seed, kControllerStream);
   internal::ControllerModel model;
   model.mass_kg = vehicle.mass_kg;
@@ -459,6 +461,82 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   model.kd = truth.rotor.kd * (1.0 + ControllerError(&controller_random, options));
   for (int a = 0; a < 3; ++a)
     model.inertia_diagonal[a] = truth.body.inertia(a, a) * (1.0 + ControllerError(&controller_random, options));
+  return model;
+}
+
+// What the IMU reads of one sample: the gyro with its noise, the accelerometer's noise (its signal is
+// added after the flight, delayed: AddDelayedAccelerometer) and its clean specific force.
+struct ImuReading {
+  Eigen::Vector3d gyro;
+  Eigen::Vector3d acc_noise;
+  Eigen::Vector3d clean_specific_force;
+};
+// The body's motion at O_b through the sensor effects in chain order (INTERFACE.md's: rotate into the
+// IMU frame, add the bias), then the noise.
+ImuReading ReadImu(const EffectChain& sensor, const SimState& state, const BodyAcceleration& acc,
+                   const SimulationOptions& options, RandomStream* imu_random) {
+  ImuSample<double> imu{state.angular_velocity_b_radps, acc.angular_acceleration_b_radps2, acc.specific_force_b_mps2};
+  for (size_t j = 0; j < sensor.kinds.size(); ++j) sensor.kinds[j]->ApplyToSensor(sensor.values[j].data(), &imu);
+  ImuReading reading;
+  reading.gyro = imu.angular_velocity + NoiseVector(imu_random, options.noise.gyro_std_radps);
+  reading.acc_noise = NoiseVector(imu_random, options.noise.acc_std_mps2);
+  reading.clean_specific_force = imu.specific_force;
+  return reading;
+}
+
+// Motion capture of one logged sample, with its noise (yaw unwrapped against the previous noisy one).
+void LogMotionCapture(int row, const SimState& state, const Eigen::Vector3d& bryant, const SimulationOptions& options,
+                      RandomStream* mocap_random, double* previous_noisy_yaw, FlightLog* log) {
+  log->mocap->position_w_m.row(row) =
+      state.position_w_m + NoiseVector(mocap_random, options.noise.mocap_position_std_m);
+  Eigen::Vector3d noisy = bryant + NoiseVector(mocap_random, options.noise.mocap_angle_std_rad);
+  noisy.z() = *previous_noisy_yaw = Unwrap(noisy.z(), *previous_noisy_yaw);
+  log->mocap->bryant_rad.row(row) = noisy;
+}
+
+// The true state of one logged sample.
+void RecordTrueState(int row, double t, const SimState& state, const BodyAcceleration& acc,
+                     const Eigen::Vector3d& bryant, const Eigen::VectorXd& acting, const Eigen::VectorXd& commanded,
+                     TrueStates* states) {
+  states->t_s[row] = t;
+  states->position_w_m.row(row) = state.position_w_m;
+  states->velocity_w_mps.row(row) = state.velocity_w_mps;
+  states->attitude_wxyz.row(row) << state.attitude_wb.w(), state.attitude_wb.x(), state.attitude_wb.y(),
+      state.attitude_wb.z();
+  states->bryant_rad.row(row) = bryant;
+  states->specific_force_b_mps2.row(row) = acc.specific_force_b_mps2;
+  states->angular_velocity_b_radps.row(row) = state.angular_velocity_b_radps;
+  states->angular_acceleration_b_radps2.row(row) = acc.angular_acceleration_b_radps2;
+  states->rotor_speed_radps.row(row) = acting;
+  states->rotor_command_radps.row(row) = commanded;
+}
+
+// Stops a flight that diverged (off to infinity, or tilted beyond 80 degrees).
+void CheckNotDiverged(double t, const SimState& state, const Eigen::Matrix3d& r_wb) {
+  if (!state.position_w_m.allFinite() || state.position_w_m.norm() > 1000.0 || r_wb(2, 2) < std::cos(80.0 / kRadToDeg))
+    throw Error("the simulated flight diverged at t = " + FormatNumber(t) + " s (tilt " +
+                FormatNumber(std::acos(std::clamp(r_wb(2, 2), -1.0, 1.0)) * kRadToDeg) +
+                " deg); try a smaller excitation, delay or motor lag");
+}
+
+}  // namespace
+
+SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth, const SimulationOptions& options) {
+  ValidateSimulation(vehicle, truth, options);
+  const Effects& effects = options.effects;
+  const RotorSignalTiming timing = RotorSignalTimingOf(effects);
+  const double command_latency_s = timing.command_latency_s, motor_time_constant_s = timing.motor_time_constant_s;
+  // The sensor effects in chain order, from the body towards the log, and the delay of the
+  // accelerometer stream behind the gyro's (applied to the whole series after the flight).
+  const EffectChain sensor = ActingEffects(effects, EffectStage::kImuSensor);
+  double accelerometer_delay_s = 0.0;
+  for (size_t j = 0; j < sensor.kinds.size(); ++j)
+    accelerometer_delay_s += sensor.kinds[j]->SimulatedAccelerometerDelay(sensor.values[j]);
+  const double g = options.gravity_mps2;
+  const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
+                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force);
+
+  const internal::ControllerModel model = ControllerModelOf(vehicle, truth, options);
   const double loop_latency_s = command_latency_s + motor_time_constant_s + 1.0 / options.log_rate_hz;
   const Eigen::VectorXd hover = HoverRotorSpeeds(vehicle, truth, g);
   const Vehicle flown = FlownVehicle(vehicle, options, hover);
@@ -490,7 +568,6 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   SimulationResult result = PrepareResult(flown, truth, options, num_logged);
   result.controller = {model.kt, model.kd, model.inertia_diagonal, controller.hover_speed_radps()};
   FlightLog& log = result.log;
-  TrueStates& states = result.states;
 
   RandomStream imu_random(options.seed, kImuStream);
   RandomStream mocap_random(options.seed, kMocapStream);
@@ -502,54 +579,28 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     const Eigen::Matrix3d r_wb = state.attitude_wb.toRotationMatrix();
     const Eigen::VectorXd acting = dynamics.ActingRotorSpeeds(t, state, command);
     const BodyAcceleration acc = dynamics.Accelerations(t, state, acting, dynamics.ActingRotorRates(t, state, command));
-    if (!state.position_w_m.allFinite() || state.position_w_m.norm() > 1000.0 ||
-        r_wb(2, 2) < std::cos(80.0 / kRadToDeg))
-      throw Error("the simulated flight diverged at t = " + FormatNumber(t) + " s (tilt " +
-                  FormatNumber(std::acos(std::clamp(r_wb(2, 2), -1.0, 1.0)) * kRadToDeg) +
-                  " deg); try a smaller excitation, delay or motor lag");
-
-    // The IMU: the body's motion at O_b through the sensor effects in chain order (INTERFACE.md's:
-    // rotate into the IMU frame, add the bias), then the noise.
-    ImuSample<double> imu{state.angular_velocity_b_radps, acc.angular_acceleration_b_radps2, acc.specific_force_b_mps2};
-    for (size_t j = 0; j < sensor.kinds.size(); ++j) sensor.kinds[j]->ApplyToSensor(sensor.values[j].data(), &imu);
-    const Eigen::Vector3d gyro = imu.angular_velocity + NoiseVector(&imu_random, options.noise.gyro_std_radps);
-    const Eigen::Vector3d acc_noise = NoiseVector(&imu_random, options.noise.acc_std_mps2);
-    clean_accelerometer[k] = imu.specific_force;
+    CheckNotDiverged(t, state, r_wb);
+    const ImuReading imu = ReadImu(sensor, state, acc, options, &imu_random);
+    clean_accelerometer[k] = imu.clean_specific_force;
 
     Eigen::Vector3d bryant = RotationToBryant(r_wb);
     bryant.z() = previous_yaw = Unwrap(bryant.z(), previous_yaw);
     if (k >= num_warmup) {
       const int row = k - num_warmup;
       log.t_s[row] = t;
-      log.gyro_radps.row(row) = gyro;
-      log.acc_mps2.row(row) = acc_noise;  // the signal is added after the flight
+      log.gyro_radps.row(row) = imu.gyro;
+      log.acc_mps2.row(row) = imu.acc_noise;  // the signal is added after the flight
       log.rotor_radps.row(row) = battery ? battery_record.command[k] : rotor_signal.Sample(k);
       if (battery) (*log.voltage_v)[row] = battery_record.voltage_v[k];
-      if (options.mocap) {
-        log.mocap->position_w_m.row(row) =
-            state.position_w_m + NoiseVector(&mocap_random, options.noise.mocap_position_std_m);
-        Eigen::Vector3d noisy = bryant + NoiseVector(&mocap_random, options.noise.mocap_angle_std_rad);
-        noisy.z() = previous_noisy_yaw = Unwrap(noisy.z(), previous_noisy_yaw);
-        log.mocap->bryant_rad.row(row) = noisy;
-      }
-      states.t_s[row] = t;
-      states.position_w_m.row(row) = state.position_w_m;
-      states.velocity_w_mps.row(row) = state.velocity_w_mps;
-      states.attitude_wxyz.row(row) << state.attitude_wb.w(), state.attitude_wb.x(), state.attitude_wb.y(),
-          state.attitude_wb.z();
-      states.bryant_rad.row(row) = bryant;
-      states.specific_force_b_mps2.row(row) = acc.specific_force_b_mps2;
-      states.angular_velocity_b_radps.row(row) = state.angular_velocity_b_radps;
-      states.angular_acceleration_b_radps2.row(row) = acc.angular_acceleration_b_radps2;
-      states.rotor_speed_radps.row(row) = acting;
-      states.rotor_command_radps.row(row) = command(t);
+      if (options.mocap) LogMotionCapture(row, state, bryant, options, &mocap_random, &previous_noisy_yaw, &log);
+      RecordTrueState(row, t, state, acc, bryant, acting, command(t), &result.states);
     }
     if (k + 1 == num_total) break;
 
     // The controller acts on this sample; its output is the logged rotor signal of the next one
     // (one sample of latency), so the log interpolated between samples is exactly what the motors get.
     const double dt_control = k > 0 ? t - times[k - 1] : 1.0 / options.log_rate_hz;
-    const internal::ControllerInput input{state.position_w_m, state.velocity_w_mps, state.attitude_wb, gyro};
+    const internal::ControllerInput input{state.position_w_m, state.velocity_w_mps, state.attitude_wb, imu.gyro};
     const Eigen::VectorXd wanted = controller.Update(t, dt_control, input, pilot.At(t + loop_latency_s));
     // The voltage of the next sample sags with this sample's load.
     rotor_signal.Append(
@@ -560,7 +611,7 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     state = IntegrateToNextSample(dynamics, command, times, k, command_latency_s, options.physics_rate_hz, state);
   }
   AddDelayedAccelerometer(times, clean_accelerometer, num_warmup, accelerometer_delay_s, &log.acc_mps2);
-  result.summary = Summarise(states);
+  result.summary = Summarise(result.states);
   if (battery) result.summary.voltage_range_v << log.voltage_v->minCoeff(), log.voltage_v->maxCoeff();
   return result;
 }

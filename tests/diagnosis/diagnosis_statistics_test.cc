@@ -180,4 +180,74 @@ TEST(HeldOutScoreTest, AStaticMomentThatAFirstMomentBalancesDoesNotPay) {
   EXPECT_LT(fz_ssr, base_ssr - 0.1 * rows);
 }
 
+// The guard of the selection (WorsenedComponents): a component whose held-out residual grows
+// steadily by 20 % is worse beyond its noise; the same growth in one short burst is not significant
+// with the residual's autocorrelation; a steady growth of 3 % is below the 5 % that matters; the
+// other components, which shrink, are never named; a residual that grows with its model's rotor
+// wrench (a row group's free scale) is not worse.
+TEST(HeldOutScoreTest, AComponentWorseBeyondItsNoiseIsNamed) {
+  const int rows = 1000;
+  Eigen::MatrixXd before(rows, 6), wrench(rows, 6);
+  for (int r = 0; r < rows; ++r)
+    for (int j = 0; j < 6; ++j) {
+      before(r, j) = std::sin(0.37 * r + j) + 0.5 * std::sin(2.3 * r + 3 * j);
+      wrench(r, j) = 1.0 + 0.5 * std::cos(0.11 * r + j);
+    }
+  const HeldOutResidual without = OneScoredSegment(before, wrench);
+  const HeldOutScales scales = BaselineScales(without, 1);
+  const ComponentVector no_noise = ComponentVector::Zero();
+
+  Eigen::MatrixXd steady = 0.6 * before;
+  steady.col(4) = 1.2 * before.col(4);
+  const std::vector<ComponentWorsening> worse =
+      WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, no_noise, 5.0, 0.05);
+  ASSERT_EQ(worse.size(), 1u);
+  EXPECT_EQ(worse[0].component, 4);
+  EXPECT_NEAR(worse[0].growth_pct, 20.0, 1e-9);
+  EXPECT_GT(worse[0].t_statistic, 10.0);
+
+  // The same 20 % of RMS added by rows 100-139 alone (one slow burst, an autocorrelated piece).
+  Eigen::MatrixXd burst = 0.6 * before;
+  burst.col(4) = before.col(4);
+  const double extra = std::sqrt(0.44 * before.col(4).squaredNorm() / 40.0);
+  for (int r = 100; r < 140; ++r) burst(r, 4) = std::sqrt(before(r, 4) * before(r, 4) + extra * extra);
+  const std::vector<ComponentWorsening> burst_worse =
+      WorsenedComponents(without, OneScoredSegment(burst, wrench), scales, no_noise, 5.0, 0.05);
+  EXPECT_TRUE(burst_worse.empty()) << burst_worse.front().t_statistic;
+
+  Eigen::MatrixXd slight = 0.6 * before;
+  slight.col(4) = 1.03 * before.col(4);
+  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(slight, wrench), scales, no_noise, 5.0, 0.05).empty());
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(slight, wrench), scales, no_noise, 2.0, 0.05).size(), 1u);
+
+  // Mz's residual 16 % larger with its rotor moment 16 % larger: kd larger with true thrust scales.
+  Eigen::MatrixXd scaled = 0.6 * before, scaled_wrench = wrench;
+  scaled.col(5) = 1.16 * before.col(5);
+  scaled_wrench.col(5) *= 1.16;
+  EXPECT_TRUE(
+      WorsenedComponents(without, OneScoredSegment(scaled, scaled_wrench), scales, no_noise, 5.0, 0.05).empty());
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(scaled, wrench), scales, no_noise, 5.0, 0.05).size(), 1u);
+
+  // The steady 20 % growth of My with 60 % of its residual noise: its model error grows from
+  // sqrt(0.4) to sqrt(1.44 - 0.6) of the old RMS (+45 %) and ends above the noise: worse.
+  // With 99 % noise the residual ends at 1.2 / sqrt(0.99) of its floor, within sqrt(2): not worse.
+  ComponentVector noisy = ComponentVector::Zero();
+  noisy[4] = 0.6;
+  EXPECT_EQ(WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, noisy, 5.0, 0.05).size(), 1u);
+  noisy[4] = 0.99;
+  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(steady, wrench), scales, noisy, 5.0, 0.05).empty());
+
+  // Mx's residual 4 % smaller while its rotor moment varies 15 % less (thrust scales change it): 13 %
+  // worse against the rotor moment, but not in newtons metres: not worse.
+  Eigen::MatrixXd smaller = 0.6 * before, flatter = wrench;
+  smaller.col(3) = 0.96 * before.col(3);
+  flatter.col(3) = (wrench.col(3).array() - wrench.col(3).mean()) * 0.85 + wrench.col(3).mean();
+  EXPECT_TRUE(WorsenedComponents(without, OneScoredSegment(smaller, flatter), scales, no_noise, 5.0, 0.05).empty());
+
+  // A component left out of the score (Mz without kd) is not judged.
+  HeldOutResidual unscored = OneScoredSegment(steady, wrench);
+  unscored.scored[0][4] = false;
+  EXPECT_TRUE(WorsenedComponents(without, unscored, scales, no_noise, 5.0, 0.05).empty());
+}
+
 }  // namespace rotorid::internal

@@ -148,5 +148,18 @@ TEST(VerdictNoteTest, AnEffectOnItsBoundIsImplausible) {
             "motor_lag is bought with that value: not selected)");
 }
 
+// Real jana06: the lever arm removes 14.4 % of the pooled held-out residual (Fy, Mx) and adds to My.
+TEST(VerdictNoteTest, AnEffectThatWorsensAComponentSaysWhichAndIsNotSelected) {
+  EffectVerdict v;
+  v.kind = kMisalignment;
+  v.status = "worsens a component";
+  v.worsens = "My: residual 4.04e-05 -> 4.87e-05 N m (+20.6 % against its rotor moment, t = 1.9) over none";
+  v.test.shrink_pct = 14.4;
+  EXPECT_EQ(VerdictNote(v, DiagnosisOptions(), {}),
+            "worsens a component held out: My: residual 4.04e-05 -> 4.87e-05 N m (+20.6 % against its rotor moment, "
+            "t = 1.9) over none (its held-out shrink of 14.4 % on top of none trades that component for others "
+            "rather than explaining the gap: not selected)");
+}
+
 }  // namespace
 }  // namespace rotorid::internal

@@ -61,6 +61,15 @@ struct DiagnosisOptions {
   // that step: they cannot remove the most held-out residual (they are refined at the next step, on
   // top of the winner, if they pass the screening there).
   double rival_fraction = 0.7;
+  // A candidate that removes held-out residual in some components but makes a scored component's
+  // held-out residual RMS grow by more than this (%), significantly at level component_growth_alpha
+  // (one-sided, paired per row), over the model it is added to or over the linear model, is not
+  // selected at that step: it trades components rather than explaining the gap (real jana06: an IMU
+  // lever arm removed 48 % of Fy and 13 % of Mx and added 21 % to My, t = 1.85 with the residual's
+  // autocorrelation; docs/diagnosis.md, "No component worse"). A guard: the burden of proof is on the
+  // candidate, so its level is loose.
+  double max_component_growth_pct = 5.0;
+  double component_growth_alpha = 0.05;
   // Forward selection stops after this many effects.
   int max_effects = 3;
   // Start of the delay (and lag) candidate in the folds: a coarse search of the TLS criterion over
@@ -151,7 +160,8 @@ struct EffectVerdict {
   // "implausible" (significant, but only with a value outside its physical range: it absorbs something
   // else, and is never selected; `implausible` says which value and range), "negligible" (significant,
   // but with a value below the size that matters for that effect: never selected; `negligible` says
-  // which), "not significant", or
+  // which), "worsens a component" (significant, but a held-out component got worse beyond its noise:
+  // not selected at that step; `worsens` says which), "not significant", or
   // "unavailable" (a flight lacks an input it needs: `note` says which).
   std::string status;
   bool selected = false;
@@ -179,6 +189,9 @@ struct EffectVerdict {
   std::string implausible;
   // Status "negligible": which value lies below which size, and why that size (also in `note`).
   std::string negligible;
+  // Status "worsens a component": significant, but it made a held-out component worse beyond its
+  // noise (DiagnosisOptions::max_component_growth_pct): which, by how much (also in `note`).
+  std::string worsens;
   // Selected delay or motor lag: its value refitted at half the low-pass cut-off, where a true one
   // holds and one the controller's reply to sensor noise fakes vanishes (also in `note`).
   std::string held_at_half_cutoff;
