@@ -433,9 +433,12 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
   const Effects& effects = options.effects;
   // The rotor-signal effects as the physics sees them: a delay of the command and a first-order lag.
   double command_latency_s = 0.0, motor_time_constant_s = 0.0;
+  SlowActuation slow_actuation;
   for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal)) {
     command_latency_s += kind->SimulatedCommandDelay(effects.Get(kind));
     motor_time_constant_s += kind->SimulatedMotorTimeConstant(effects.Get(kind));
+    if (const SlowActuation slow = kind->SimulatedSlowActuation(effects.Get(kind)); slow.active())
+      slow_actuation = slow;
   }
   // The sensor effects in chain order, from the body towards the log, and the delay of the
   // accelerometer stream behind the gyro's (applied to the whole series after the flight).
@@ -449,7 +452,8 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     throw Error("simulation options: the external force (" + FormatNumber(options.external_force.world_n.norm()) +
                 " N) must not exceed 0.3 m g = " + FormatNumber(0.3 * truth.mass_kg * g) + " N");
   const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
-                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force);
+                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force,
+                                    slow_actuation);
 
   // The controller's slightly wrong model: right mass (weighed), CoM assumed at O_d.
   RandomStream controller_random(options.seed, kControllerStream);
