@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "model/effect_adapter.h"
+#include "rotorid/core/units.h"
 
 namespace rotorid::internal {
 namespace {
@@ -25,7 +26,7 @@ struct SlowActuationModel {
     using std::exp;
     using std::sqrt;
     const T& fraction = p[0];
-    const T x = T(2.0 * M_PI * input.dt) * p[1];
+    const T x = T(2.0 * kPi * input.dt) * p[1];
     const T d = exp(-x);
     const T c = ScalarPart(x) > 1e-4 ? (T(1.0) - d) / x : T(1.0) - x / T(2.0) + x * x / T(6.0);
     const T b0 = c - d, b1 = T(1.0) - c;
@@ -43,7 +44,7 @@ struct SlowActuationModel {
   }
   static double CommandDelay(const Eigen::VectorXd&) { return 0.0; }
   static double MotorTimeConstant(const Eigen::VectorXd&) { return 0.0; }
-  static SlowActuation SlowComponent(const Eigen::VectorXd& v) { return {v[0], 2.0 * M_PI * v[1]}; }
+  static SlowActuation SlowComponent(const Eigen::VectorXd& v) { return {v[0], 2.0 * kPi * v[1]}; }
   // No delay is this component: the diagnosis starts it absent.
   static double EquivalentValue(double) { return 0.0; }
 };
