@@ -62,6 +62,16 @@ class ImuEffect final : public EffectDescriptor {
 //     static double MotorTimeConstant(const Eigen::VectorXd& v);   // the lag the simulator adds
 //     static double EquivalentValue(double delay_s);               // about this rotor-signal delay
 //   };
+//   and optionally  static SlowActuation SlowComponent(const Eigen::VectorXd& v);  // after the lag
+template <class Model>
+constexpr auto HasSlowComponent(int) -> decltype(Model::SlowComponent(Eigen::VectorXd()), bool()) {
+  return true;
+}
+template <class Model>
+constexpr bool HasSlowComponent(long) {
+  return false;
+}
+
 template <class Model>
 class RotorSignalEffect final : public EffectDescriptor {
  public:
@@ -76,8 +86,15 @@ class RotorSignalEffect final : public EffectDescriptor {
   }
   double SimulatedCommandDelay(const Eigen::VectorXd& v) const override { return Model::CommandDelay(v); }
   double SimulatedMotorTimeConstant(const Eigen::VectorXd& v) const override { return Model::MotorTimeConstant(v); }
+  SlowActuation SimulatedSlowActuation(const Eigen::VectorXd& v) const override {
+    if constexpr (HasSlowComponent<Model>(0)) {
+      return Model::SlowComponent(v);
+    } else {
+      return {};
+    }
+  }
   Eigen::VectorXd FromEquivalentDelay(double delay_s) const override {
-    return Clamp(Eigen::VectorXd::Constant(1, Model::EquivalentValue(delay_s)));
+    return Clamp(Eigen::VectorXd::Constant(info().dimension, Model::EquivalentValue(delay_s)));
   }
 };
 

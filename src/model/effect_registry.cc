@@ -15,7 +15,8 @@
   X(RotorThrustScaleEffect) \
   X(AccDelayEffect)         \
   X(GroundEffectEffect)    \
-  X(BatteryEffect)
+  X(BatteryEffect)         \
+  X(SlowActuationEffect)
 
 namespace rotorid {
 namespace internal {

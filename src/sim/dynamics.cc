@@ -27,16 +27,20 @@ Eigen::Vector3d ExternalForce::At(double t_s) const {
 
 MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
                                        double motor_time_constant_s, EffectChain rotor_wrench,
-                                       ExternalForce external_force)
+                                       ExternalForce external_force, SlowActuation slow_actuation)
     : vehicle_(vehicle),
       parameters_(parameters),
       gravity_w_(0.0, 0.0, -gravity_mps2),
       motor_time_constant_s_(motor_time_constant_s),
       rotor_wrench_(std::move(rotor_wrench)),
-      external_force_(external_force) {
+      external_force_(external_force),
+      slow_actuation_(slow_actuation) {
   if (!(gravity_mps2 >= 0.0) || !std::isfinite(gravity_mps2)) throw Error("gravity must be a finite number >= 0");
   if (!(motor_time_constant_s >= 0.0) || !std::isfinite(motor_time_constant_s))
     throw Error("motor_time_constant_s must be a finite number >= 0");
+  if (!(slow_actuation.fraction >= 0.0 && slow_actuation.fraction <= 1.0) || !(slow_actuation.rate_per_s >= 0.0) ||
+      !std::isfinite(slow_actuation.rate_per_s))
+    throw Error("the slow actuation's fraction must be in [0, 1] and its rate a finite number >= 0");
   // The 6x6 spatial inertia must be positive definite, or ForwardDynamics has no unique answer.
   Eigen::Matrix<double, 6, 6> spatial;
   const Eigen::Matrix3d ms_skew = Skew<double>(parameters.body.first_moment);
@@ -48,14 +52,38 @@ MultirotorDynamics::MultirotorDynamics(const Vehicle& vehicle, const VehiclePara
         "(spatial inertia not positive definite)");
 }
 
-Eigen::VectorXd MultirotorDynamics::ActingRotorSpeeds(double t_s, const SimState& state,
-                                                      const RotorCommand& command) const {
+Eigen::VectorXd MultirotorDynamics::MotorSpeeds(double t_s, const SimState& state, const RotorCommand& command) const {
   if (vehicle_.rotors.empty()) return Eigen::VectorXd();
   return motor_time_constant_s_ > 0.0 ? state.rotor_speed_radps : command(t_s);
 }
 
+Eigen::VectorXd MultirotorDynamics::SlowSquare(const SimState& state, const Eigen::VectorXd& motor_speed) const {
+  if (state.slow_square_radps2.size() == motor_speed.size()) return state.slow_square_radps2;
+  return motor_speed.array().square();
+}
+
+Eigen::VectorXd MultirotorDynamics::ActingRotorSpeeds(double t_s, const SimState& state,
+                                                      const RotorCommand& command) const {
+  const Eigen::VectorXd motor = MotorSpeeds(t_s, state, command);
+  if (!slow_actuation_.active() || motor.size() == 0) return motor;
+  const double a = slow_actuation_.fraction;
+  return ((1.0 - a) * motor.array().square() + a * SlowSquare(state, motor).array()).max(0.0).sqrt();
+}
+
 Eigen::VectorXd MultirotorDynamics::ActingRotorRates(double t_s, const SimState& state,
                                                      const RotorCommand& command) const {
+  const Eigen::VectorXd rates = MotorRates(t_s, state, command);
+  if (!slow_actuation_.active() || rates.size() == 0) return rates;
+  // d/dt sqrt(E), E = (1 - a) Omega^2 + a S.
+  const double a = slow_actuation_.fraction;
+  const Eigen::ArrayXd motor = MotorSpeeds(t_s, state, command).array(), slow = SlowSquare(state, motor).array();
+  const Eigen::ArrayXd acting = ((1.0 - a) * motor.square() + a * slow).max(0.0).sqrt();
+  const Eigen::ArrayXd acting_square_rate =
+      2.0 * (1.0 - a) * motor * rates.array() + a * slow_actuation_.rate_per_s * (motor.square() - slow);
+  return (acting > 0.0).select(acting_square_rate / (2.0 * acting), 0.0).matrix();
+}
+
+Eigen::VectorXd MultirotorDynamics::MotorRates(double t_s, const SimState& state, const RotorCommand& command) const {
   if (vehicle_.rotors.empty()) return Eigen::VectorXd();
   if (motor_time_constant_s_ > 0.0) return (command(t_s) - state.rotor_speed_radps) / motor_time_constant_s_;
   // The command is linear between its kinks and the integrator's steps end on them: the forward
@@ -99,16 +127,18 @@ BodyAcceleration MultirotorDynamics::Accelerations(double t_s, const SimState& s
 }
 
 Eigen::VectorXd MultirotorDynamics::Pack(const SimState& state) const {
-  Eigen::VectorXd x(kRotorIndex + vehicle_.num_rotors());
+  const int n = vehicle_.num_rotors();
+  Eigen::VectorXd x(kRotorIndex + (slow_actuation_.active() ? 2 * n : n));
   x.segment<3>(kPositionIndex) = state.position_w_m;
   x.segment<3>(kVelocityIndex) = state.velocity_w_mps;
   x.segment<4>(kQuaternionIndex) << state.attitude_wb.w(), state.attitude_wb.x(), state.attitude_wb.y(),
       state.attitude_wb.z();
   x.segment<3>(kAngularVelocityIndex) = state.angular_velocity_b_radps;
-  if (state.rotor_speed_radps.size() == vehicle_.num_rotors())
-    x.tail(vehicle_.num_rotors()) = state.rotor_speed_radps;
+  if (state.rotor_speed_radps.size() == n)
+    x.segment(kRotorIndex, n) = state.rotor_speed_radps;
   else
-    x.tail(vehicle_.num_rotors()).setZero();
+    x.segment(kRotorIndex, n).setZero();
+  if (slow_actuation_.active()) x.tail(n) = SlowSquare(state, x.segment(kRotorIndex, n));
   return x;
 }
 
@@ -119,7 +149,8 @@ SimState MultirotorDynamics::Unpack(const Eigen::VectorXd& x) const {
   state.attitude_wb = Eigen::Quaterniond(x[kQuaternionIndex], x[kQuaternionIndex + 1], x[kQuaternionIndex + 2],
                                          x[kQuaternionIndex + 3]);
   state.angular_velocity_b_radps = x.segment<3>(kAngularVelocityIndex);
-  state.rotor_speed_radps = x.tail(vehicle_.num_rotors());
+  state.rotor_speed_radps = x.segment(kRotorIndex, vehicle_.num_rotors());
+  if (slow_actuation_.active()) state.slow_square_radps2 = x.tail(vehicle_.num_rotors());
   return state;
 }
 
@@ -130,10 +161,9 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   // keeps the raw q so that the step stays a plain RK4 step.
   const Eigen::Matrix3d r_wb = state.attitude_wb.normalized().toRotationMatrix();
   const Eigen::VectorXd acting = ActingRotorSpeeds(t_s, state, command);
-  // The rates: the lag's state derivative, and what rotor-wrench effects see (else not needed).
-  const Eigen::VectorXd rates = motor_time_constant_s_ > 0.0 || !rotor_wrench_.kinds.empty()
-                                    ? ActingRotorRates(t_s, state, command)
-                                    : Eigen::VectorXd();
+  // The acting rates only for rotor-wrench effects (else not needed).
+  const Eigen::VectorXd rates =
+      !rotor_wrench_.kinds.empty() ? ActingRotorRates(t_s, state, command) : Eigen::VectorXd();
   const BodyAcceleration acc = Accelerations(t_s, state, acting, rates);
 
   Eigen::VectorXd dx(x.size());
@@ -143,10 +173,15 @@ Eigen::VectorXd MultirotorDynamics::Derivative(double t_s, const Eigen::VectorXd
   const Eigen::Quaterniond q_dot = state.attitude_wb * Eigen::Quaterniond(0.0, w.x(), w.y(), w.z());
   dx.segment<4>(kQuaternionIndex) << 0.5 * q_dot.w(), 0.5 * q_dot.x(), 0.5 * q_dot.y(), 0.5 * q_dot.z();
   dx.segment<3>(kAngularVelocityIndex) = acc.angular_acceleration_b_radps2;
-  if (motor_time_constant_s_ > 0.0 && !vehicle_.rotors.empty())
-    dx.tail(vehicle_.num_rotors()) = rates;
+  const int n = vehicle_.num_rotors();
+  if (motor_time_constant_s_ > 0.0 && n > 0)
+    dx.segment(kRotorIndex, n) = MotorRates(t_s, state, command);
   else
-    dx.tail(vehicle_.num_rotors()).setZero();
+    dx.segment(kRotorIndex, n).setZero();
+  if (slow_actuation_.active()) {
+    const Eigen::VectorXd motor = MotorSpeeds(t_s, state, command);
+    dx.tail(n) = slow_actuation_.rate_per_s * (motor.array().square() - state.slow_square_radps2.array()).matrix();
+  }
   return dx;
 }
 

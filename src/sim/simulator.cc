@@ -437,16 +437,20 @@ void ValidateSimulation(const Vehicle& vehicle, const VehicleParameters& truth, 
                 " N) must not exceed 0.3 m g = " + FormatNumber(0.3 * truth.mass_kg * g) + " N");
 }
 
-// The rotor-signal effects as the physics sees them: a delay of the command and a first-order lag.
+// The rotor-signal effects as the physics sees them: a delay of the command, a first-order lag and
+// a slow share of the acting Omega^2.
 struct RotorSignalTiming {
   double command_latency_s = 0.0;
   double motor_time_constant_s = 0.0;
+  SlowActuation slow_actuation;
 };
 RotorSignalTiming RotorSignalTimingOf(const Effects& effects) {
   RotorSignalTiming timing;
   for (EffectKind kind : EffectsOfStage(EffectStage::kRotorSignal)) {
     timing.command_latency_s += kind->SimulatedCommandDelay(effects.Get(kind));
     timing.motor_time_constant_s += kind->SimulatedMotorTimeConstant(effects.Get(kind));
+    if (const SlowActuation slow = kind->SimulatedSlowActuation(effects.Get(kind)); slow.active())
+      timing.slow_actuation = slow;
   }
   return timing;
 }
@@ -534,7 +538,8 @@ SimulationResult Simulate(const Vehicle& vehicle, const VehicleParameters& truth
     accelerometer_delay_s += sensor.kinds[j]->SimulatedAccelerometerDelay(sensor.values[j]);
   const double g = options.gravity_mps2;
   const MultirotorDynamics dynamics(vehicle, truth, options.gravity_mps2, motor_time_constant_s,
-                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force);
+                                    ActingEffects(effects, EffectStage::kRotorWrench), options.external_force,
+                                    timing.slow_actuation);
 
   const internal::ControllerModel model = ControllerModelOf(vehicle, truth, options);
   const double loop_latency_s = command_latency_s + motor_time_constant_s + 1.0 / options.log_rate_hz;

@@ -59,6 +59,7 @@ const std::map<std::string, Recipe>& Recipes() {
       {"acc_delay", {Values({0.005}), Values({0.001})}},
       {"ground_effect", {Values({1.0}), Values({0.2}), FlightProfile::kPaper, 0.3}},
       {"battery", {Values({1.0}), Values({0.1}), FlightProfile::kPaper, 1.5, true}},
+      {"slow_actuation", {Values({0.3, 0.4}), Values({0.03, 0.06})}},
   };
   return recipes;
 }
@@ -245,7 +246,8 @@ TEST_P(EffectHarnessTest, CorrectionUndoesTheSimulatorsView) {
     return;
   }
   const double delay = kind->SimulatedCommandDelay(value), tau = kind->SimulatedMotorTimeConstant(value);
-  if (delay == 0.0 && tau == 0.0) {
+  const SlowActuation slow = kind->SimulatedSlowActuation(value);
+  if (delay == 0.0 && tau == 0.0 && !slow.active()) {
     const auto& inputs = kind->info().inputs;
     EXPECT_NE(std::find(inputs.begin(), inputs.end(), FlightInput::kRotorCommand), inputs.end())
         << kind->name() << ": a rotor-signal effect the simulator neither delays nor lags must act on the command";
@@ -255,20 +257,23 @@ TEST_P(EffectHarnessTest, CorrectionUndoesTheSimulatorsView) {
   Eigen::VectorXd model;
   kind->TransformRotorSignal(value.data(), fixture.Input(), fixture.speed, &model);
   // What the simulator integrates: the signal (linear between samples) delayed, then the lag's
-  // response, at 100 substeps per sample.
+  // response and the slow component's low-pass of its square, at 100 substeps per sample (Euler).
   auto logged_at = [&](double t) {
     const double x = std::clamp(t / fixture.dt, 0.0, double(fixture.speed.size() - 1));
     const int i = std::min(static_cast<int>(x), static_cast<int>(fixture.speed.size()) - 2);
     return fixture.speed[i] + (x - i) * (fixture.speed[i + 1] - fixture.speed[i]);
   };
   Eigen::VectorXd simulated(fixture.speed.size());
-  double state = logged_at(-delay);
+  double state = logged_at(-delay), slow_square = state * state;
   const int substeps = 100;
   for (Eigen::Index k = 0; k < fixture.speed.size(); ++k) {
-    simulated[k] = tau > 0 ? state : logged_at(fixture.time[k] - delay);
-    for (int j = 0; j < substeps && tau > 0; ++j) {
+    const double motor = tau > 0 ? state : logged_at(fixture.time[k] - delay);
+    simulated[k] = std::sqrt((1.0 - slow.fraction) * motor * motor + slow.fraction * slow_square);
+    for (int j = 0; j < substeps; ++j) {
       const double t = fixture.time[k] + j * fixture.dt / substeps;
-      state += fixture.dt / substeps / tau * (logged_at(t - delay) - state);
+      const double speed = tau > 0 ? state : logged_at(t - delay);
+      slow_square += fixture.dt / substeps * slow.rate_per_s * (speed * speed - slow_square);
+      if (tau > 0) state += fixture.dt / substeps / tau * (logged_at(t - delay) - state);
     }
   }
   // From one time constant or delay on, past the start-up (the model's filter starts at rest).

@@ -160,6 +160,35 @@ TEST(SimDynamicsTest, MotorLagFollowsAStepWithItsTimeConstant) {
   EXPECT_LT(max_error, 1e-6);
 }
 
+// A step of the command from 500 to 1000 rad/s (no lag): Omega_acting^2 = (1 - a) 1000^2 + a S with
+// S = 1000^2 - (1000^2 - 500^2) exp(-rate t), and the acting rate is the derivative of that root.
+TEST(SimDynamicsTest, SlowActuationFollowsAStepOfTheSquareWithItsRate) {
+  const SimulationVehicle a = PresetVehicle("A");
+  const SlowActuation slow{0.4, 2.0 * M_PI * 0.5};
+  const MultirotorDynamics dynamics(a.vehicle, a.parameters, kStandardGravity, 0.0, {}, {}, slow);
+  const MultirotorDynamics::RotorCommand step = [](double) { return Eigen::VectorXd::Constant(4, 1000.0); };
+  SimState state;
+  state.rotor_speed_radps = Eigen::VectorXd::Constant(4, 500.0);
+  state.slow_square_radps2 = Eigen::VectorXd::Constant(4, 500.0 * 500.0);
+  auto expected_square = [&](double t) {
+    return (1.0 - slow.fraction) * 1e6 + slow.fraction * (1e6 - 0.75e6 * std::exp(-slow.rate_per_s * t));
+  };
+  const double h = 1.0 / 1000.0;
+  double max_error = 0.0;
+  for (int k = 1; k <= 1000; ++k) {
+    state = dynamics.Step((k - 1) * h, state, h, step);
+    const double t = k * h;
+    max_error =
+        std::max(max_error, std::abs(dynamics.ActingRotorSpeeds(t, state, step)[1] - std::sqrt(expected_square(t))));
+  }
+  EXPECT_LT(max_error, 1e-6);
+  // At 1 s, 95.7 % of the slow part has arrived: 0.6 of the square at once, 0.4 (1 - e^-pi) of it later.
+  EXPECT_NEAR(state.slow_square_radps2[3], 1e6 - 0.75e6 * std::exp(-M_PI), 1e-3);
+  const double t = 1.0, dt = 1e-6;
+  const double numeric = (std::sqrt(expected_square(t + dt)) - std::sqrt(expected_square(t - dt))) / (2 * dt);
+  EXPECT_NEAR(dynamics.ActingRotorRates(t, state, step)[0], numeric, 1e-6 * std::abs(numeric));
+}
+
 TEST(SimDynamicsTest, WithoutLagTheRotorsAreTheCommand) {
   const SimulationVehicle a = PresetVehicle("A");
   const MultirotorDynamics dynamics(a.vehicle, a.parameters, kStandardGravity, 0.0);

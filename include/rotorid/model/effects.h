@@ -41,6 +41,14 @@ struct RotorSignalInput {
   double reference_voltage = 0.0;  // the map's voltage (vehicle file), else the flight's mean
 };
 
+// A part of the rotors' Omega_i^2 that acts only through a first-order low-pass (the slow actuation
+// component): Omega_acting^2 = (1 - fraction) Omega^2 + fraction S,  S' = rate_per_s (Omega^2 - S).
+struct SlowActuation {
+  double fraction = 0.0;
+  double rate_per_s = 0.0;
+  bool active() const { return fraction != 0.0; }
+};
+
 // Where in the chain from the true physics to the logged signals an effect acts.
 enum class EffectStage {
   kRotorSignal,  // the logged rotor signal -> the rotor speeds acting (a whole time series)
@@ -306,6 +314,9 @@ class EffectDescriptor {
   // to the whole series (its per-sample ApplyToSensor leaves the sample alone).
   virtual double SimulatedAccelerometerDelay(const Eigen::VectorXd& /*value*/) const { return 0.0; }
   virtual double SimulatedMotorTimeConstant(const Eigen::VectorXd& /*value*/) const { return 0.0; }
+  // The slow part of the actuation the simulator adds after the lag: the fraction of Omega^2 that acts
+  // through a first-order low-pass, and that low-pass's rate (1 / time constant, 1/s; 0 holds it).
+  virtual SlowActuation SimulatedSlowActuation(const Eigen::VectorXd& /*value*/) const { return {}; }
   // The value that gives a rotor-signal effect about this delay of the rotor signal (the
   // diagnosis starts it from the coarse delay search), clamped into its bounds.
   virtual Eigen::VectorXd FromEquivalentDelay(double delay_s) const;

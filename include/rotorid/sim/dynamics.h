@@ -11,6 +11,7 @@
 //   q' = q (0, w) / 2      (attitude, body to world)
 //   w' from [m 1, -[ms x]; [ms x], I] [s; w'] = wrench - velocity terms
 //   tau Omega' = Omega_cmd(t) - Omega     (Omega = Omega_cmd(t) when tau = 0)
+//   S' = rate (Omega^2 - S), Omega_acting^2 = (1 - a) Omega^2 + a S   (a slow actuation component, a != 0)
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -28,6 +29,8 @@ struct SimState {
   Eigen::Quaterniond attitude_wb = Eigen::Quaterniond::Identity();  // body to world
   Eigen::Vector3d angular_velocity_b_radps = Eigen::Vector3d::Zero();
   Eigen::VectorXd rotor_speed_radps;  // actual |Omega_i|: the motor-lag state (unused when tau = 0)
+  // S_i, the low-passed Omega_i^2 of a slow actuation component (empty: in steady state at Omega_i^2)
+  Eigen::VectorXd slow_square_radps2;
 };
 
 // A force on the vehicle that rotorid's model does not have (a tether, a payload's pull, wind),
@@ -58,9 +61,11 @@ class MultirotorDynamics {
   // `rotor_wrench`: the rotor-wrench effects acting (rotorid/model/effects.h), the same models the
   // identification corrects for.
   MultirotorDynamics(const Vehicle& vehicle, const VehicleParameters& parameters, double gravity_mps2,
-                     double motor_time_constant_s, EffectChain rotor_wrench = {}, ExternalForce external_force = {});
+                     double motor_time_constant_s, EffectChain rotor_wrench = {}, ExternalForce external_force = {},
+                     SlowActuation slow_actuation = {});
 
-  // The rotor speeds acting at time t: the lag state, or the command itself when motor_time_constant_s = 0.
+  // The rotor speeds acting at time t: the lag state, or the command itself when motor_time_constant_s = 0,
+  // through the slow actuation component when there is one.
   Eigen::VectorXd ActingRotorSpeeds(double t_s, const SimState& state, const RotorCommand& command) const;
   // Their rates Omega_i': the lag's, or the slope of the (piecewise-linear) command.
   Eigen::VectorXd ActingRotorRates(double t_s, const SimState& state, const RotorCommand& command) const;
@@ -78,10 +83,15 @@ class MultirotorDynamics {
   Eigen::Vector3d gravity_w_mps2() const { return gravity_w_; }
 
  private:
-  // Flat state [p v q(w,x,y,z) w Omega] for the integrator.
+  // Flat state [p v q(w,x,y,z) w Omega S] for the integrator (S only with a slow actuation component).
   Eigen::VectorXd Pack(const SimState& state) const;
   SimState Unpack(const Eigen::VectorXd& x) const;
   Eigen::VectorXd Derivative(double t_s, const Eigen::VectorXd& x, const RotorCommand& command) const;
+  // Omega_i (the lag state or the command) and its rate, before the slow actuation component.
+  Eigen::VectorXd MotorSpeeds(double t_s, const SimState& state, const RotorCommand& command) const;
+  Eigen::VectorXd MotorRates(double t_s, const SimState& state, const RotorCommand& command) const;
+  // S of the state, or Omega^2 when the state carries none (steady state).
+  Eigen::VectorXd SlowSquare(const SimState& state, const Eigen::VectorXd& motor_speed) const;
 
   Vehicle vehicle_;
   VehicleParameters parameters_;
@@ -89,6 +99,7 @@ class MultirotorDynamics {
   double motor_time_constant_s_;
   EffectChain rotor_wrench_;
   ExternalForce external_force_;
+  SlowActuation slow_actuation_;
 };
 
 // Torque-free motion (no gravity, no rotors) of a body with mass, first moment and inertia at O_d,
