@@ -621,8 +621,11 @@ std::vector<Check> CheckTimeBase(const std::vector<FlightData>& raw, const std::
     const Eigen::VectorXd& t = raw[k].log.t_s;
     const double largest = t.size() > 0 ? std::max(std::abs(t[0]), std::abs(t[t.size() - 1])) : 0.0;
     const double resolution = largest * std::numeric_limits<double>::epsilon();
-    const std::string stamps = "time stamps up to " + ShortNumber(largest) + " s resolve " + ShortNumber(resolution) +
-                               " s, " + ShortNumber(resolution / dt) + " of the sample interval";
+    const auto origin = raw[k].log.metadata.find("time_origin_s");
+    const std::string stamps =
+        (origin == raw[k].log.metadata.end() ? "" : "wall-clock stamps counted from " + origin->second + " s: ") +
+        "time stamps up to " + ShortNumber(largest) + " s resolve " + ShortNumber(resolution) + " s, " +
+        ShortNumber(resolution / dt) + " of the sample interval";
     if (resolution / dt > kResolutionError)
       // A warning: the bias is a few % (NanoBench's UNIX-epoch CSVs at 100 Hz read 3.9e-5), not a wrong unit.
       checks.push_back({"time_base", CheckStatus::kWarning,
