@@ -446,6 +446,31 @@ TEST_F(CliRobustnessTest, BatchOutputStaysLineCompleteAndResumesByOptions) {
   EXPECT_EQ(Lines(out).size(), 5u);
 }
 
+// 9. --report into the folder of an earlier report whose figures the user edited: an edited figure
+// the new report does not draw is kept (it was deleted), one it draws again is kept and this run's is
+// written beside it with a warning; figures as rotorid left them are replaced or removed as before.
+TEST_F(CliRobustnessTest, ReportKeepsFiguresTheUserChanged) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot is not installed";
+  const std::string folder = Dir() + "/report";
+  auto r = RunRotorid({"refine", "--vehicle", Vehicle(), "--log", Log(), "--validate-vehicle", Vehicle(),
+                       "--validate-log", Log(), "--report", folder, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string held_out = folder + "/fig_spectrum_held_out.svg", parameters = folder + "/fig_parameters.svg";
+  ASSERT_TRUE(std::filesystem::exists(held_out) && std::filesystem::exists(folder + "/fig_wrench_2.svg"));
+  std::ofstream(held_out, std::ios::app) << "<!-- the user's note -->\n";
+  std::ofstream(parameters, std::ios::app) << "<!-- the user's note -->\n";
+  const std::string held_out_bytes = Slurp(held_out), parameters_bytes = Slurp(parameters);
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Log(), "--report", folder});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Slurp(held_out), held_out_bytes);
+  EXPECT_EQ(Slurp(parameters), parameters_bytes);
+  EXPECT_TRUE(Contains(r.err, parameters + " was changed since rotorid wrote it") &&
+              Contains(r.err, "fig_parameters.new.svg"))
+      << r.err;
+  EXPECT_TRUE(Contains(Slurp(folder + "/fig_parameters.new.svg"), "<svg"));
+  EXPECT_FALSE(std::filesystem::exists(folder + "/fig_wrench_2.svg"));  // rotorid's, unchanged: removed
+}
+
 // 10. A spreadsheet's CSV: a byte-order mark and quoted cells are read as they are meant; a header
 // separated by ';' names the column map's delimiter instead of "missing required column 't'".
 TEST_F(CliRobustnessTest, SpreadsheetCsvIsReadOrNamesItsSeparator) {
