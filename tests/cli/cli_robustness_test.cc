@@ -261,6 +261,18 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check rotor_signal") && Contains(r.err, "rotor_3 reads 0")) << r.err;
 
+  // Rotors 1 and 3 exchanged (a column map or vehicle file with two rotors of opposite spin swapped):
+  // roll and pitch still correlate at 0.5, the yaw pattern is lost (exit 0 with --allow-partial
+  // before, kd and I_zz wrong; without it "fly more roll and pitch", or "IMU yawed").
+  const std::string swapped =
+      EditedLog("swapped.csv", [](std::vector<double>* row) { std::swap((*row)[7], (*row)[9]); });
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", swapped, "--allow-partial", "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check rotor_order: error: rotors 1 and 3 appear swapped")) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", swapped, "--quiet"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Contains(r.err, "likely cause: rotors 1 and 3 appear swapped")) << r.err;
+
   // A 50 Hz log at the default 10 Hz cut-off.
   const std::string slow = Dir() + "/slow.csv";
   r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--rate", "50", "--out", slow, "--quiet"});
