@@ -72,6 +72,21 @@ class CliRobustnessTest : public ::testing::Test {
       }
     });
   }
+  // `first` with `second`'s samples after its first 2 s appended on one time base (5 ms steps).
+  static std::string JoinedLog(const std::string& name, const std::string& first, const std::string& second) {
+    std::string joined = Slurp(first);
+    const double first_end = std::stod(joined.substr(joined.rfind('\n', joined.size() - 2) + 1));
+    std::istringstream rest(Slurp(second));
+    int sample = 0;
+    for (std::string line; std::getline(rest, line);) {
+      if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0])) || sample++ < 400) continue;
+      std::ostringstream t;
+      t.precision(17);
+      t << first_end + 0.005 * (sample - 400);
+      joined += t.str() + line.substr(line.find(',')) + "\n";
+    }
+    return Write(name, joined);
+  }
   // The log (or `source`) with each data row (t, gyro, acc, rotors, ...) changed by `edit`.
   static std::string EditedLog(const std::string& name, const std::function<void(std::vector<double>*)>& edit,
                                const std::string& source = Log()) {
@@ -231,21 +246,21 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   const std::string second = Dir() + "/mocap2.csv";
   r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--seed", "2", "--mocap", "--out", second, "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  std::string joined = Slurp(mocap);
-  const double first_end = std::stod(joined.substr(joined.rfind('\n', joined.size() - 2) + 1));
-  std::istringstream rest(Slurp(second));
-  int sample = 0;
-  for (std::string line; std::getline(rest, line);) {
-    if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0])) || sample++ < 400) continue;
-    const size_t comma = line.find(',');
-    std::ostringstream t;
-    t.precision(17);
-    t << first_end + 0.005 * (sample - 400);
-    joined += t.str() + line.substr(comma) + "\n";
-  }
-  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("joined.csv", joined), "--quiet"});
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", JoinedLog("joined.csv", mocap, second), "--quiet"});
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check state_jump") && Contains(r.err, "joined.csv: the position jumps")) << r.err;
+
+  // The same without motion capture: the gyro steps by 0.57 rad/s, which no rotor moment made (exit 0
+  // before, kd and I_zz discarded and ms_z -6e-3 for 0).
+  const std::string second_imu = Dir() + "/imu2.csv";
+  r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--seed", "2", "--out", second_imu, "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", JoinedLog("joined_imu.csv", Log(), second_imu), "-q"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check state_jump: error: ") &&
+              Contains(r.err, "joined_imu.csv: the angular velocity jumps by") &&
+              Contains(r.err, "two flights joined on one time base"))
+      << r.err;
 
   // An accelerometer that saturates at 11 m/s^2.
   const std::string clipped = EditedLog("clipped.csv", [](std::vector<double>* row) {
