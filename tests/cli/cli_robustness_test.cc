@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -241,6 +242,22 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", degrees, "--quiet"});
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check attitude") && Contains(r.err, "in degrees")) << r.err;
+
+  // A motion-capture quaternion written x, y, z, w under qw, qx, qy, qz (another tool's order).
+  std::string xyzw = Slurp(EditedLog(
+      "xyzw_rows.csv",
+      [](std::vector<double>* row) {
+        const Eigen::Quaterniond q = Eigen::AngleAxisd((*row)[16], Eigen::Vector3d::UnitZ()) *
+                                     Eigen::AngleAxisd((*row)[15], Eigen::Vector3d::UnitY()) *
+                                     Eigen::AngleAxisd((*row)[14], Eigen::Vector3d::UnitX());
+        (*row)[14] = q.x(), (*row)[15] = q.y(), (*row)[16] = q.z();
+        row->insert(row->begin() + 17, q.w());
+      },
+      mocap));
+  xyzw.replace(xyzw.find("roll,pitch,yaw"), 14, "qw,qx,qy,qz");
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("xyzw.csv", xyzw), "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check attitude: error") && Contains(r.err, "quaternion order")) << r.err;
 
   // Two motion-capture flights joined on one time base: the position jumps.
   const std::string second = Dir() + "/mocap2.csv";
