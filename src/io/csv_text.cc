@@ -81,8 +81,8 @@ std::optional<TimeStamp> ParseTimeStamp(std::string_view cell, double scale, dou
   const double seconds_per_unit = scale * unit_factor, units_per_second = std::round(1.0 / seconds_per_unit);
   int64_t integer = 0;
   double fraction = 0.0;
-  if (units_per_second >= 1.0 && std::abs(units_per_second * seconds_per_unit - 1.0) < 1e-12 &&
-      SplitAtDecimalPoint(cell, &integer, &fraction)) {
+  if (units_per_second >= 1.0 && units_per_second <= 1e18 &&
+      std::abs(units_per_second * seconds_per_unit - 1.0) < 1e-12 && SplitAtDecimalPoint(cell, &integer, &fraction)) {
     const auto per_second = static_cast<int64_t>(units_per_second);
     return TimeStamp{static_cast<double>(integer / per_second),
                      (static_cast<double>(integer % per_second) + fraction) / units_per_second};
