@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "rotorid/core/error.h"
 #include "rotorid/model/effects.h"
@@ -71,14 +72,27 @@ Eigen::Vector3d ColumnNoise(const Eigen::MatrixXd& x) {
   return sigma;
 }
 
-// The sample interval: the median, which dropouts and jitter do not move; the mean where the two differ
-// only as much as the stamps' rounding can (1e-9 to 1e-4 of it). Stamps of a UNIX epoch through a
-// double (2.4e-7 s at 1.7e9 s) put the median 2e-5 off at 200 Hz, the resampling grid then drifted off
-// the samples (0.3 sample intervals after 60 s), and its interpolation's smoothing biased kd and I_zz by
-// -4 % (the bundled B flight); the mean is off by the rounding over the whole log. Exact stamps keep
-// the median (their results unchanged to the bit).
+// The sample interval: the median, which dropouts and jitter do not move. Stamps of a wall clock (a
+// UNIX epoch) carry a double's rounding (2.4e-7 s at 1.7e9 s): it put the median 2e-5 off at 200 Hz,
+// the resampling grid then drifted off the samples (0.3 sample intervals after 60 s), and its
+// interpolation's smoothing biased kd and I_zz by -4 % (the bundled B flight). For such stamps (read
+// as offsets from a wall clock, metadata 'time_origin_s', or still large) the interval is the mean of
+// the intervals within half the median of it (dropouts left out), where it differs from the median by
+// what rounding can (1e-9 to 1e-4): off by the rounding over the whole log. Exact stamps and other logs
+// keep the median (their results unchanged to the bit).
 double SampleInterval(const FlightLog& log) {
-  const double median = log.MedianDt(), mean = log.duration_s() / std::max(log.num_samples() - 1, 1);
+  const double median = log.MedianDt();
+  const int n = log.num_samples();
+  const bool wall_clock = log.metadata.count("time_origin_s") > 0 ||
+                          (n > 0 && std::abs(log.t_s[n - 1]) * std::numeric_limits<double>::epsilon() > 1e-9 * median);
+  if (!wall_clock) return median;
+  double sum = 0.0;
+  int count = 0;
+  for (int i = 1; i < n; ++i) {
+    const double interval = log.t_s[i] - log.t_s[i - 1];
+    if (std::abs(interval - median) <= 0.5 * median) sum += interval, ++count;
+  }
+  const double mean = count > 0 ? sum / count : median;
   const double difference = std::abs(mean - median);
   return difference > 1e-9 * median && difference <= 1e-4 * median ? mean : median;
 }
