@@ -191,7 +191,8 @@ GyroStep LargestGyroStep(const FlightLog& log) {
   double best_ratio = 0.0;
   for (Eigen::Index i = kNeighbours + 1; i + kNeighbours < n; ++i) {
     const double step = steps[static_cast<size_t>(i)];
-    if (!(step > 0.0)) continue;
+    // The typical step is at least the global median: most samples need no local median.
+    if (!(step > 0.0) || step <= best_ratio * global) continue;
     std::vector<double> around;
     for (Eigen::Index j = i - kNeighbours; j <= i + kNeighbours; ++j)
       if (j != i) around.push_back(steps[static_cast<size_t>(j)]);
