@@ -432,22 +432,6 @@ std::string HeaderPreview(const std::vector<std::string>& names) {
   return out;
 }
 
-// Time cells in integer units (us, ns) can exceed double's 53 bits; read them as integers and
-// split whole seconds from the fraction so that no precision is lost before scaling.
-std::optional<double> ParseTime(std::string_view cell, const MappedQuantity& q) {
-  if (q.scale == 1.0 && q.unit_factor < 1.0) {
-    int64_t ticks = 0;
-    const auto r = std::from_chars(cell.data(), cell.data() + cell.size(), ticks);
-    if (r.ec == std::errc() && r.ptr == cell.data() + cell.size()) {
-      const auto per_second = static_cast<int64_t>(std::llround(1.0 / q.unit_factor));
-      return static_cast<double>(ticks / per_second) + static_cast<double>(ticks % per_second) * q.unit_factor;
-    }
-  }
-  const std::optional<double> value = internal::ParseFiniteNumber(cell);
-  if (!value) return std::nullopt;
-  return *value * q.scale * q.unit_factor;
-}
-
 Eigen::Matrix3d FrameFlip(bool flip) {
   return flip ? Eigen::Vector3d(1, -1, -1).asDiagonal().toDenseMatrix() : Eigen::Matrix3d::Identity();
 }
@@ -528,7 +512,8 @@ struct NeededColumn {
   int cell = -1;  // index in a row
   const MappedQuantity* quantity = nullptr;
   bool is_time = false;
-  std::vector<double> values;
+  std::vector<double> values;  // the time: the stamps' coarse parts
+  std::vector<double> fine;    // the time: the stamps' fine parts (internal::TimeStamp)
 };
 
 // The columns read for the quantities, each column once even when several quantities share it.
@@ -613,7 +598,10 @@ MappedColumns LocateColumns(const std::vector<const MappedQuantity*>& quantities
 void ReadMappedRows(std::string_view rest, int line_number, size_t num_cells, const ColumnMap& map,
                     const std::string& source, MappedColumns* columns) {
   const size_t expected_rows = static_cast<size_t>(std::count(rest.begin(), rest.end(), '\n')) + 1;
-  for (NeededColumn& column : columns->needed) column.values.reserve(expected_rows);
+  for (NeededColumn& column : columns->needed) {
+    column.values.reserve(expected_rows);
+    if (column.is_time) column.fine.reserve(expected_rows);
+  }
   columns->row_lines.reserve(expected_rows);
   std::vector<std::string_view> cells;
   std::vector<int> starts;
@@ -628,21 +616,30 @@ void ReadMappedRows(std::string_view rest, int line_number, size_t num_cells, co
     }
     for (NeededColumn& column : columns->needed) {
       const std::string_view cell = cells[column.cell];
-      const std::optional<double> value =
-          column.is_time ? ParseTime(cell, *column.quantity) : internal::ParseFiniteNumber(cell);
+      std::optional<internal::TimeStamp> value;
+      if (column.is_time)
+        value = internal::ParseTimeStamp(cell, column.quantity->scale, column.quantity->unit_factor);
+      else if (const std::optional<double> number = internal::ParseFiniteNumber(cell))
+        value = internal::TimeStamp{*number};
       if (!value) {
         throw Error(Located(
             source, line.number, starts[column.cell] + 1,
             "column '" + column.name + "' holds '" + std::string(cell.substr(0, 40)) + "', not a finite number"));
       }
-      column.values.push_back(*value);
+      column.values.push_back(value->coarse_s);
+      if (column.is_time) column.fine.push_back(value->fine_s);
     }
     columns->row_lines.push_back(line.number);
   }
 }
 
-Eigen::VectorXd ReadTime(const MappedColumns& columns, const ColumnMap& map, const std::string& source) {
-  const Eigen::VectorXd t_s = Eigen::Map<const Eigen::VectorXd>(columns.Values(map.time, 0).data(), columns.num_rows());
+// Wall-clock stamps become offsets from the first (metadata 'time_origin_s'; internal::TimesFromStamps).
+Eigen::VectorXd ReadTime(const MappedColumns& columns, const ColumnMap& map, const std::string& source,
+                         std::map<std::string, std::string>* metadata) {
+  const NeededColumn& time = columns.needed[columns.slots_of_quantity[0][0]];
+  std::vector<internal::TimeStamp> stamps(time.values.size());
+  for (size_t i = 0; i < stamps.size(); ++i) stamps[i] = {time.values[i], time.fine[i]};
+  const Eigen::VectorXd t_s = internal::TimesFromStamps(stamps, metadata);
   if (const std::optional<int> i = internal::FirstNonIncreasingTime(t_s)) {
     throw Error(Located(source, columns.row_lines[*i], 0,
                         "time goes backwards or repeats: column '" + map.time.columns[0] + "' " +
@@ -739,7 +736,7 @@ FlightLog ParseMappedCsv(std::string_view text, const std::string& source, const
   log.gravity_mps2 = map.gravity_mps2;
   log.metadata = map.metadata;
   log.metadata["column_map"] = map.source;
-  log.t_s = ReadTime(columns, map, source);
+  log.t_s = ReadTime(columns, map, source, &log.metadata);
   // Rows are samples: the frame change v' = F v is row' = row F (F symmetric).
   const Eigen::Matrix3d body_flip = FrameFlip(map.frame == BodyFrame::kFrd);
   log.gyro_radps = columns.Vector3(map.gyro) * body_flip;

@@ -61,7 +61,8 @@ bool IsKnownColumn(const std::string& name) {
 // The rows of a stretch of the file: the values of every column rotorid reads, and the metadata
 // of the comments among them.
 struct TableRows {
-  std::vector<std::vector<double>> data;  // per cell; empty for ignored columns
+  std::vector<std::vector<double>> data;  // per cell; empty for ignored columns (the time: coarse parts)
+  std::vector<double> time_fine;          // the time stamps' fine parts (internal::TimeStamp)
   std::vector<int> row_lines;             // file line of each data row
   std::map<std::string, std::string> metadata;
 };
@@ -76,6 +77,7 @@ struct FlightTable {
   std::vector<std::string> names;    // per cell
   std::vector<bool> known;           // per cell: a column rotorid reads
   std::map<std::string, int> index;  // name -> cell
+  int time_cell = -1;                // the cell of 't'
   std::vector<TableRows> parts;      // the rows, in file order, as the stretches read them
 
   std::optional<int> Find(const std::string& name) const {
@@ -99,6 +101,14 @@ struct FlightTable {
       row -= static_cast<Eigen::Index>(part.row_lines.size());
     }
     return 0;
+  }
+  std::vector<internal::TimeStamp> TimeStamps() const {
+    std::vector<internal::TimeStamp> stamps;
+    stamps.reserve(static_cast<size_t>(num_rows()));
+    for (const TableRows& part : parts)
+      for (size_t i = 0; i < part.time_fine.size(); ++i)
+        stamps.push_back({part.data[static_cast<size_t>(time_cell)][i], part.time_fine[i]});
+    return stamps;
   }
   // The parts' values joined (no joined copy of every column is kept: a 1 h log's are 60 MB).
   Eigen::VectorXd Column(int cell) const {
@@ -143,7 +153,22 @@ void ReadHeader(const internal::TextLine& line, FlightTable* table) {
       throw Error(Located(table->source, line.number, CellColumn(line.text, k), "empty column name in header"));
     if (!table->index.emplace(name, static_cast<int>(k)).second)
       throw Error(Located(table->source, line.number, CellColumn(line.text, k), "duplicate column '" + name + "'"));
+    if (name == "t") table->time_cell = static_cast<int>(k);
   }
+}
+
+// The time stamp of a row, split as internal::TimeStamp.
+void ReadTimeCell(const internal::TextLine& line, const FlightTable& table, size_t k, std::string_view raw,
+                  TableRows* rows) {
+  const std::string_view cell = Unquoted(TrimSpaces(raw));
+  const std::optional<internal::TimeStamp> stamp = internal::ParseTimeStamp(cell, 1.0, 1.0);
+  if (!stamp)
+    throw Error(Located(table.source, line.number, CellColumn(line.text, k),
+                        internal::ParseNumber(cell)
+                            ? "column 't' holds '" + std::string(cell) + "', not a finite number"
+                            : "column 't' is not a number: '" + std::string(cell) + "'"));
+  rows->data[k].push_back(stamp->coarse_s);
+  rows->time_fine.push_back(stamp->fine_s);
 }
 
 // Only the columns rotorid reads must hold numbers. The cells are taken off the line one by one
@@ -161,6 +186,10 @@ void ReadRow(const internal::TextLine& line, const FlightTable& table, TableRows
     const std::string_view raw = rest.substr(0, comma);
     rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma + 1);
     if (!table.known[k]) continue;
+    if (static_cast<int>(k) == table.time_cell) {
+      ReadTimeCell(line, table, k, raw, rows);
+      continue;
+    }
     // Most cells are a bare finite number: parsed in place, without trimming or the checks below.
     double number = 0.0;
     const auto parsed = fast_float::from_chars(raw.data(), raw.data() + raw.size(), number);
@@ -188,6 +217,7 @@ TableRows ReserveRows(const FlightTable& table, size_t lines) {
   TableRows rows;
   rows.data.resize(table.names.size());
   rows.row_lines.reserve(lines);
+  rows.time_fine.reserve(lines);
   for (size_t k = 0; k < rows.data.size(); ++k)
     if (table.known[k]) rows.data[k].reserve(lines);
   return rows;
@@ -360,13 +390,13 @@ double ReadGravity(const std::map<std::string, std::string>& metadata, const std
 
 FlightLog ParseFlightCsv(const std::string& text, const std::string& source, int num_rotors) {
   FlightTable table = ReadTable(text, source);
-  const int t_col = table.Require("t");
+  table.Require("t");
   for (const char* name : {"gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z"}) table.Require(name);
   internal::RequireMinFlightSamples(source, static_cast<int>(table.num_rows()));
 
   FlightLog log;
   log.source = source;
-  log.t_s = table.Column(t_col);
+  log.t_s = internal::TimesFromStamps(table.TimeStamps(), &table.metadata);
   if (const std::optional<int> i = internal::FirstNonIncreasingTime(log.t_s)) {
     throw Error(Located(source, table.RowLine(*i), 1,
                         "time goes backwards or repeats: t = " + std::to_string(log.t_s[*i]) + " after " +

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "rotorid/core/error.h"
@@ -79,10 +80,24 @@ void AddNotes(const FlightLog& log, const std::string& format, FlightInputSummar
         "the rotor signal is a motor command without a command_to_speed map in the vehicle file: kt "
         "and kd come out per (command unit)^2, not per (rad/s)^2");
   }
+  if (const std::string origin = Meta(log, "time_origin_s"); !origin.empty()) {
+    s->notes.push_back("the time stamps are a wall clock from " + origin +
+                       " s: times are counted from that first stamp (--window takes either)");
+  }
   if (const std::string problems = Meta(log, "ulog_warnings"); !problems.empty()) {
     s->notes.push_back("the ULog reader reported " + problems +
                        " problem(s) (e.g. a truncated end): parts of the log may be missing");
   }
+}
+
+// A log whose stamps are a wall clock counts its times from the first stamp (metadata
+// 'time_origin_s'): a window given on the wall clock (from the origin on) is moved onto those times.
+std::optional<TimeWindow> OnTheLogsTimes(const FlightLog& log, const std::optional<TimeWindow>& window) {
+  const std::string origin_text = Meta(log, "time_origin_s");
+  if (!window || origin_text.empty()) return window;
+  const double origin = std::strtod(origin_text.c_str(), nullptr);
+  if (!(window->start_s >= origin)) return window;
+  return TimeWindow{window->start_s - origin, window->end_s - origin};
 }
 
 }  // namespace
@@ -107,15 +122,15 @@ SegmentMode ParseSegmentMode(const std::string& text) {
 }
 
 std::string FlightInputSummary::ConsoleLine() const {
-  std::string line = "read: " + file + " (" + format + ", " + FormatValue("%.0f Hz", imu_rate_hz) + ", " + rotor_signal +
-                     " from " + rotor_signal_source + "), ";
+  std::string line = "read: " + file + " (" + format + ", " + FormatValue("%.0f Hz", imu_rate_hz) + ", " +
+                     rotor_signal + " from " + rotor_signal_source + "), ";
   const double start = window ? std::max(window->start_s, log_start_s) : log_start_s;
   const double end = window ? std::min(window->end_s, log_end_s) : log_end_s;
-  line += FormatValue("%.2f", start) + "-" + FormatValue("%.2f s", end) + ", " + FormatValue("%.2f s used", used_s) + " in " +
-          std::to_string(kept.size()) + " stretch" + (kept.size() == 1 ? "" : "es");
+  line += FormatValue("%.2f", start) + "-" + FormatValue("%.2f s", end) + ", " + FormatValue("%.2f s used", used_s) +
+          " in " + std::to_string(kept.size()) + " stretch" + (kept.size() == 1 ? "" : "es");
   for (const LeftOutStretch& l : left_out) {
-    line += "\n  left out " + FormatValue("%9.3f", l.start_s) + " - " + FormatValue("%9.3f s", l.end_s) + "  " + l.reason +
-            (l.detail.empty() ? "" : ": " + l.detail);
+    line += "\n  left out " + FormatValue("%9.3f", l.start_s) + " - " + FormatValue("%9.3f s", l.end_s) + "  " +
+            l.reason + (l.detail.empty() ? "" : ": " + l.detail);
   }
   for (const std::string& note : notes) line += "\n  note: " + note;
   return line;
@@ -140,16 +155,17 @@ FlightInputSummary DescribeFlightInput(const FlightLog& log, const std::string& 
   return s;
 }
 
-SelectedFlight SelectFlight(FlightLog log, const std::string& path, const std::optional<TimeWindow>& window,
+SelectedFlight SelectFlight(FlightLog log, const std::string& path, const std::optional<TimeWindow>& asked_window,
                             SegmentMode mode, const std::optional<SegmentationOptions>& segmentation_options) {
   SelectedFlight selected;
   FlightInputSummary& s = selected.summary;
   s = DescribeFlightInput(log, path);
-  s.window = window;
+  s.window = OnTheLogsTimes(log, asked_window);
   s.segment_mode = mode == SegmentMode::kAuto ? "auto" : "none";
   s.kept.clear();
 
   FlightLog cut = std::move(log);
+  const std::optional<TimeWindow> window = OnTheLogsTimes(cut, asked_window);
   if (window) {
     const Eigen::VectorXd& t = cut.t_s;
     const int begin = static_cast<int>(std::lower_bound(t.data(), t.data() + t.size(), window->start_s) - t.data());
@@ -195,8 +211,8 @@ SelectedFlight SelectFlight(FlightLog log, const std::string& path, const std::o
     s.used_s += segment.duration_s();
     // Messages about a segment name its stretch of the file.
     if (selected.segments.size() > 1 || !segments.excluded.empty() || window)
-      segment.source =
-          path + " [" + FormatValue("%.2f", s.kept.back().start_s) + "-" + FormatValue("%.2f s", s.kept.back().end_s) + "]";
+      segment.source = path + " [" + FormatValue("%.2f", s.kept.back().start_s) + "-" +
+                       FormatValue("%.2f s", s.kept.back().end_s) + "]";
   }
   return selected;
 }

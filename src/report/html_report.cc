@@ -16,6 +16,7 @@
 #include "report/html_answer.h"
 #include "report/html_text.h"
 #include "report/report_figures.h"
+#include "report/report_files.h"
 #include "report/spectrum.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/text.h"
@@ -39,9 +40,6 @@ using internal::Sci;
 using nlohmann::json;
 
 namespace {
-
-// The figures the last report written into a folder produced, one file name a line.
-constexpr const char* kFigureManifest = ".rotorid_report_figures";
 
 // The components with a rotor wrench (Table III's columns).
 const std::vector<int> kRotorComponents = {2, 3, 4, 5};
@@ -229,7 +227,6 @@ class ReportBuilder {
   std::string AblationSection() const;
   std::string SettingsSection() const;
 
-  void RemoveStaleFigures(const std::set<std::string>& written) const;
   void Warn(const std::string& message) { warnings_.push_back(message); }
   std::vector<size_t> FlightsOfGroup(bool held_out) const;
 
@@ -879,26 +876,6 @@ std::string ReportBuilder::Page() const {
   return html;
 }
 
-// Figures an earlier report wrote into this folder would be mistaken for this run's: the ones the
-// folder's manifest lists (this writer's own, never anything else) and this run did not write again
-// are removed, and the manifest then lists this run's.
-void ReportBuilder::RemoveStaleFigures(const std::set<std::string>& written) const {
-  const std::filesystem::path manifest = std::filesystem::path(dir_) / kFigureManifest;
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(manifest, ec)) {
-    std::istringstream lines(ReadFile(manifest.string()));
-    for (std::string name; std::getline(lines, name);) {
-      const std::filesystem::path file = std::filesystem::path(dir_) / name;
-      const bool ours = name.rfind("fig_", 0) == 0 && name.find('/') == std::string::npos &&
-                        std::filesystem::path(name).extension() == ".svg";
-      if (ours && !written.count(name) && std::filesystem::is_regular_file(file, ec)) std::filesystem::remove(file, ec);
-    }
-  }
-  std::string list;
-  for (const std::string& name : written) list += name + "\n";
-  WriteFileAtomically(manifest.string(), list);
-}
-
 ReportSummary ReportBuilder::Build() {
   for (const ReportFlight& f : input_.flights)
     if (!f.flight) throw Error("report: flight '" + f.label + "' has no data (null ProcessedFlight)");
@@ -924,18 +901,14 @@ ReportSummary ReportBuilder::Build() {
   // Composed before any file is written, so that a failure leaves the folder as it was.
   const std::string page = Page();
   ReportSummary summary;
-  std::set<std::string> written;
-  for (const RenderedFigure& f : figures_) {
-    if (f.svg.empty()) continue;
-    const std::string path = (std::filesystem::path(dir_) / (f.spec.name + ".svg")).string();
-    WriteFileAtomically(path, f.svg);
-    summary.figure_paths.push_back(path);
-    written.insert(f.spec.name + ".svg");
-  }
-  RemoveStaleFigures(written);
+  // Figures an earlier report wrote here would be mistaken for this run's: they go, unless the user
+  // changed them; a file the user changed is not written over either (internal::ReportFiles).
+  internal::ReportFiles files(dir_);
+  for (const RenderedFigure& f : figures_)
+    if (!f.svg.empty()) summary.figure_paths.push_back(files.Write(f.spec.name + ".svg", f.svg, &warnings_));
   summary.figures_drawn = !gnuplot_path_.empty() && summary.figure_paths.size() == figures_.size();
-  summary.html_path = (std::filesystem::path(dir_) / "report.html").string();
-  WriteFileAtomically(summary.html_path, page);
+  summary.html_path = files.Write("report.html", page, &warnings_);
+  files.RemoveStaleAndSave();
   summary.warnings = warnings_;
   if (options_.print_warnings)
     for (const std::string& w : warnings_) std::cerr << "rotorid: report: " << w << "\n";

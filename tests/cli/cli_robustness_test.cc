@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -71,6 +72,21 @@ class CliRobustnessTest : public ::testing::Test {
         (*row)[k + 1] = -s * x + c * y;
       }
     });
+  }
+  // `first` with `second`'s samples after its first 2 s appended on one time base (5 ms steps).
+  static std::string JoinedLog(const std::string& name, const std::string& first, const std::string& second) {
+    std::string joined = Slurp(first);
+    const double first_end = std::stod(joined.substr(joined.rfind('\n', joined.size() - 2) + 1));
+    std::istringstream rest(Slurp(second));
+    int sample = 0;
+    for (std::string line; std::getline(rest, line);) {
+      if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0])) || sample++ < 400) continue;
+      std::ostringstream t;
+      t.precision(17);
+      t << first_end + 0.005 * (sample - 400);
+      joined += t.str() + line.substr(line.find(',')) + "\n";
+    }
+    return Write(name, joined);
   }
   // The log (or `source`) with each data row (t, gyro, acc, rotors, ...) changed by `edit`.
   static std::string EditedLog(const std::string& name, const std::function<void(std::vector<double>*)>& edit,
@@ -227,25 +243,41 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check attitude") && Contains(r.err, "in degrees")) << r.err;
 
+  // A motion-capture quaternion written x, y, z, w under qw, qx, qy, qz (another tool's order).
+  std::string xyzw = Slurp(EditedLog(
+      "xyzw_rows.csv",
+      [](std::vector<double>* row) {
+        const Eigen::Quaterniond q = Eigen::AngleAxisd((*row)[16], Eigen::Vector3d::UnitZ()) *
+                                     Eigen::AngleAxisd((*row)[15], Eigen::Vector3d::UnitY()) *
+                                     Eigen::AngleAxisd((*row)[14], Eigen::Vector3d::UnitX());
+        (*row)[14] = q.x(), (*row)[15] = q.y(), (*row)[16] = q.z();
+        row->insert(row->begin() + 17, q.w());
+      },
+      mocap));
+  xyzw.replace(xyzw.find("roll,pitch,yaw"), 14, "qw,qx,qy,qz");
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("xyzw.csv", xyzw), "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check attitude: error") && Contains(r.err, "quaternion order")) << r.err;
+
   // Two motion-capture flights joined on one time base: the position jumps.
   const std::string second = Dir() + "/mocap2.csv";
   r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--seed", "2", "--mocap", "--out", second, "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  std::string joined = Slurp(mocap);
-  const double first_end = std::stod(joined.substr(joined.rfind('\n', joined.size() - 2) + 1));
-  std::istringstream rest(Slurp(second));
-  int sample = 0;
-  for (std::string line; std::getline(rest, line);) {
-    if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0])) || sample++ < 400) continue;
-    const size_t comma = line.find(',');
-    std::ostringstream t;
-    t.precision(17);
-    t << first_end + 0.005 * (sample - 400);
-    joined += t.str() + line.substr(comma) + "\n";
-  }
-  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Write("joined.csv", joined), "--quiet"});
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", JoinedLog("joined.csv", mocap, second), "--quiet"});
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check state_jump") && Contains(r.err, "joined.csv: the position jumps")) << r.err;
+
+  // The same without motion capture: the gyro steps by 0.57 rad/s, which no rotor moment made (exit 0
+  // before, kd and I_zz discarded and ms_z -6e-3 for 0).
+  const std::string second_imu = Dir() + "/imu2.csv";
+  r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--seed", "2", "--out", second_imu, "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", JoinedLog("joined_imu.csv", Log(), second_imu), "-q"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check state_jump: error: ") &&
+              Contains(r.err, "joined_imu.csv: the angular velocity jumps by") &&
+              Contains(r.err, "two flights joined on one time base"))
+      << r.err;
 
   // An accelerometer that saturates at 11 m/s^2.
   const std::string clipped = EditedLog("clipped.csv", [](std::vector<double>* row) {
@@ -261,11 +293,19 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_TRUE(Contains(r.err, "check rotor_signal") && Contains(r.err, "rotor_3 reads 0")) << r.err;
 
-  // UNIX-epoch time stamps (2.4e-7 s resolution), and a 50 Hz log at the default 10 Hz cut-off.
-  const std::string epoch = EditedLog("epoch.csv", [](std::vector<double>* row) { (*row)[0] += 1.7e9; });
-  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", epoch});
-  EXPECT_EQ(r.exit_code, 0) << r.err;  // a warning: a bias of a few %, which real epoch logs (NanoBench) have
-  EXPECT_TRUE(Contains(r.err, "check time_base: warning") && Contains(r.err, "epoch.csv")) << r.err;
+  // Rotors 1 and 3 exchanged (a column map or vehicle file with two rotors of opposite spin swapped):
+  // roll and pitch still correlate at 0.5, the yaw pattern is lost (exit 0 with --allow-partial
+  // before, kd and I_zz wrong; without it "fly more roll and pitch", or "IMU yawed").
+  const std::string swapped =
+      EditedLog("swapped.csv", [](std::vector<double>* row) { std::swap((*row)[7], (*row)[9]); });
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", swapped, "--allow-partial", "--quiet"});
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_TRUE(Contains(r.err, "check rotor_order: error: rotors 1 and 3 appear swapped")) << r.err;
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", swapped, "--quiet"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(Contains(r.err, "likely cause: rotors 1 and 3 appear swapped")) << r.err;
+
+  // A 50 Hz log at the default 10 Hz cut-off.
   const std::string slow = Dir() + "/slow.csv";
   r = RunRotorid({"simulate", "--preset", "A", "--seconds", "10", "--rate", "50", "--out", slow, "--quiet"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -278,6 +318,54 @@ TEST_F(CliRobustnessTest, UnitAndAlignmentMistakesFailTheirChecks) {
   // The same flight in rad/s, IMU aligned, passes every check.
   r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Log(), "--quiet"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+// 6. UNIX-epoch time stamps: the bundled A flight with 1.7e9 s added to each stamp's digits gives the
+// parameters of the flight from 0 to 1e-9 (kd, I_zz were -0.4 to -4 % off: a double resolves 1.7e9 s to
+// 2.4e-7 s). Stamps already rounded through a double (printed with 17 digits) come within 1e-5; a
+// --window on the wall clock is the same window counted from the first stamp.
+TEST_F(CliRobustnessTest, EpochTimeStampsGiveTheParametersOfTheFlightFromZero) {
+  const std::string bundled = testing::SourceDir() + "/data/sim/A_train.csv";
+  const std::string vehicle = testing::SourceDir() + "/data/sim/A.yaml";
+  std::istringstream in(Slurp(bundled));
+  std::string shifted, rounded;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0]))) {
+      shifted += line + "\n", rounded += line + "\n";
+      continue;
+    }
+    const size_t comma = line.find(','), point = line.find('.');
+    const std::string stamp = line.substr(0, comma);
+    const long long whole = std::stoll(stamp.substr(0, std::min(point, comma)));
+    shifted += std::to_string(1700000000LL + whole) + (point < comma ? line.substr(point) : line.substr(comma)) + "\n";
+    std::ostringstream t;
+    t.precision(17);
+    t << std::stod(stamp) + 1.7e9;
+    rounded += t.str() + line.substr(comma) + "\n";
+  }
+  auto parameters = [&](const std::string& log, std::vector<std::string> extra) {
+    const std::string json = Dir() + "/epoch.json";
+    std::vector<std::string> args = {"identify", "--vehicle", vehicle, "--log", log, "--json", json};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = RunRotorid(args);
+    EXPECT_EQ(r.exit_code, 0) << log << ": " << r.err;
+    return std::make_pair(nlohmann::json::parse(Slurp(json))["linear"]["parameters"], r.out + r.err);
+  };
+  const auto reference = parameters(bundled, {"-q"}).first;
+  auto largest_difference = [&](const nlohmann::json& p) {
+    double largest = 0.0;
+    for (const auto& [name, value] : reference.items())
+      if (value["value"].get<double>() != 0.0)
+        largest = std::max(largest, std::abs(p[name]["value"].get<double>() / value["value"].get<double>() - 1.0));
+    return largest;
+  };
+  const auto [epoch, console] = parameters(Write("epoch.csv", shifted), {});
+  EXPECT_LT(largest_difference(epoch), 1e-9);
+  EXPECT_TRUE(Contains(console, "wall clock from 1700000000.000000000 s")) << console;
+  EXPECT_FALSE(Contains(console, "check time_base")) << console;
+  EXPECT_LT(largest_difference(parameters(Write("epoch17.csv", rounded), {"-q"}).first), 1e-5);
+  EXPECT_EQ(parameters(Dir() + "/epoch.csv", {"--window", "1700000010,1700000050", "-q"}).first,
+            parameters(Dir() + "/epoch.csv", {"--window", "10,50", "-q"}).first);
 }
 
 // 3. A YAML alias bomb (a few hundred bytes that expand to 9^9 nodes) is refused by every YAML
@@ -400,6 +488,31 @@ TEST_F(CliRobustnessTest, BatchOutputStaysLineCompleteAndResumesByOptions) {
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(Contains(r.err, "another rotorid batch")) << r.err;
   EXPECT_EQ(Lines(out).size(), 5u);
+}
+
+// 9. --report into the folder of an earlier report whose figures the user edited: an edited figure
+// the new report does not draw is kept (it was deleted), one it draws again is kept and this run's is
+// written beside it with a warning; figures as rotorid left them are replaced or removed as before.
+TEST_F(CliRobustnessTest, ReportKeepsFiguresTheUserChanged) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot is not installed";
+  const std::string folder = Dir() + "/report";
+  auto r = RunRotorid({"refine", "--vehicle", Vehicle(), "--log", Log(), "--validate-vehicle", Vehicle(),
+                       "--validate-log", Log(), "--report", folder, "--quiet"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string held_out = folder + "/fig_spectrum_held_out.svg", parameters = folder + "/fig_parameters.svg";
+  ASSERT_TRUE(std::filesystem::exists(held_out) && std::filesystem::exists(folder + "/fig_wrench_2.svg"));
+  std::ofstream(held_out, std::ios::app) << "<!-- the user's note -->\n";
+  std::ofstream(parameters, std::ios::app) << "<!-- the user's note -->\n";
+  const std::string held_out_bytes = Slurp(held_out), parameters_bytes = Slurp(parameters);
+  r = RunRotorid({"identify", "--vehicle", Vehicle(), "--log", Log(), "--report", folder});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Slurp(held_out), held_out_bytes);
+  EXPECT_EQ(Slurp(parameters), parameters_bytes);
+  EXPECT_TRUE(Contains(r.err, parameters + " was changed since rotorid wrote it") &&
+              Contains(r.err, "fig_parameters.new.svg"))
+      << r.err;
+  EXPECT_TRUE(Contains(Slurp(folder + "/fig_parameters.new.svg"), "<svg"));
+  EXPECT_FALSE(std::filesystem::exists(folder + "/fig_wrench_2.svg"));  // rotorid's, unchanged: removed
 }
 
 // 10. A spreadsheet's CSV: a byte-order mark and quoted cells are read as they are meant; a header

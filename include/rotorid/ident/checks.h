@@ -55,7 +55,9 @@ struct InputCheckThresholds {
   double pattern_correlation_ok = 0.4;
   // The rotor moments may turn at most this far (deg) about z from the rotor positions' pattern:
   // the mistakes come in steps of 45 deg (a board mounted yawed, an X vehicle given as +); sims
-  // read below 1 deg, real Crazyflie flights up to 29.5 deg (jana01: full yaw turns with roll).
+  // read below 1 deg. Real flights with a velocity (motion capture, an estimator) at most 7.5 deg, once
+  // the moments the velocity explains (rotor drag) are left out: jana01 read -29.5 deg with them. The
+  // Betaflight Gecko log, without velocity, reads 26 deg.
   double imu_yaw_deg = 35.0;
   // A transposition of two rotors is named when it fits with at least this correlation (and by 0.5
   // better than the file's order).
