@@ -1011,49 +1011,48 @@ std::string RefineReselected(const IdentificationResult& linear, const RefineOpt
          "step (these flights fix their ratios, not their scale)";
 }
 
-// One rule for the essential parameters of both blocks (EssentialSelectionDrops): a refined essential
-// parameter whose refined %sigma breaks the selection's rule is discarded in the pass's TLS as the
-// selection would have (estimated beside the others where its physics excludes 0, else held at 0), and
-// the pass solved again, until none does. Needs the refined covariance. kt, the scale, is not a
-// candidate: without it there is no model (the TLS calls that unusable).
-void ApplyEssentialRule(const IdentificationResult& linear, const RefineOptions& options, PassStart pass,
-                        RefineResult* result) {
+// One rule for the essential parameters of both blocks (EssentialSelectionDrops, noise-aware): a refined
+// essential parameter whose physics excludes 0 (kd, the inertia's diagonal) and whose refined %sigma
+// breaks the selection's rule is discarded as the selection discards it: estimated beside the others
+// (profiled), predicted with, not reported. The refinement estimated it already, and the others'
+// covariance is their marginal one: relabelling moves no value. A first moment or a product of
+// inertia would be held at 0 instead, which changes the model (on jana04 by PWM the cascade dropped
+// ms_x and ms_y and Table III's Mx rose 27 -> 94 %): those stay essential with their refined std, and
+// the check refined_identifiable names them.
+void ApplyEssentialRule(const IdentificationResult& linear, RefineResult* result) {
+  if (!result->has_covariance || linear.options.tls.method != TlsMethod::kNoiseAware) return;
+  TlsSolution& refined = result->refined;
   const std::vector<std::string>& names = linear.system.parameter_names;
-  RefineOptions again = options;
-  again.coarse_delay_search = false;
-  while (result->has_covariance) {
-    const TlsSolution& refined = result->refined;
+  if (refined.profiled.size() != refined.essential.size()) return;
+  while (true) {
     std::vector<int> essential;
     for (int k = 0; k < linear.system.num_parameters(); ++k)
       if (refined.essential[k]) essential.push_back(k);
     Eigen::VectorXd rel(static_cast<Eigen::Index>(essential.size()));
-    for (size_t a = 0; a < essential.size(); ++a)
-      rel[static_cast<Eigen::Index>(a)] = essential[a] == 0 ? -1.0 : refined.rel_std_pct[essential[a]];
+    for (size_t a = 0; a < essential.size(); ++a) {
+      const int k = essential[a];
+      rel[static_cast<Eigen::Index>(a)] = k != 0 && PositiveByPhysics(names[k]) ? refined.rel_std_pct[k] : -1.0;
+    }
     const int worst = EssentialSelectionDrops(rel, linear.options.tls);
-    if (worst < 0) return;
+    if (worst < 0) break;
     const int k = essential[static_cast<size_t>(worst)];
     DiscardedParameter dropped = DiscardedOf(names, essential, refined.chi(essential),
                                              refined.covariance(essential, essential), worst, rel[worst]);
-    dropped.reason = "its refined %sigma exceeds the limit";
-    TlsSolution& tls = pass.tls;
-    tls.essential[k] = false;
-    if (linear.options.tls.method == TlsMethod::kNoiseAware && PositiveByPhysics(names[k]) &&
-        tls.profiled.size() == tls.essential.size()) {
-      dropped.reason += "; estimated beside the others, not held at 0 (its physics excludes 0)";
-      tls.profiled[k] = true;
-      tls.profiled_chi[k] = refined.chi[k];
-      tls.profiled_std[k] = refined.std[k];
-    }
-    tls.discarded.push_back(dropped);
-    tls.chi[k] = 0.0;
-    tls.covariance.row(k).setZero();
-    tls.covariance.col(k).setZero();
-    tls.std[k] = 0.0;
-    std::optional<TlsSolution> reselected = result->reselected;
-    *result = SolvePass(linear, pass, result->effects, again, /*start_pass=*/false);
-    result->reselected = reselected;
+    dropped.reason =
+        "its refined %sigma exceeds the limit; estimated beside the others, not held at 0 (its "
+        "physics excludes 0)";
+    refined.discarded.push_back(dropped);
+    refined.essential[k] = false;
+    refined.profiled[k] = true;
+    refined.profiled_chi[k] = refined.chi[k];
+    refined.profiled_std[k] = refined.std[k];
+    refined.chi[k] = 0.0;
+    refined.covariance.row(k).setZero();
+    refined.covariance.col(k).setZero();
+    SetStdFromCovariance(names, &refined);
     LOG(INFO) << "refined block: " << names[k] << " discarded at " << dropped.rel_std_pct << " % relative std";
   }
+  SetAllowedRanges(linear.system, ConfigurationMasses(linear.flights), &refined);
 }
 
 // The warnings of a finished refinement: estimates on a bound, pinned spin patterns, estimates relative
@@ -1127,7 +1126,7 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
   // With no effect the refinement is the TLS, whose selection stands (the refined covariance, from the
   // Jacobian of the whitened rows, differs from the TLS's by some % of itself: a product of inertia the
   // TLS kept under 10 % read 11.3 % on a 30 s flight).
-  if (options.compute_covariance && !options.effects.empty()) ApplyEssentialRule(linear, options, pass, &result);
+  if (!options.effects.empty()) ApplyEssentialRule(linear, &result);
   if (!held.empty()) result.warnings.push_back(held);
   NoteBodyConstraint(&result);
   AddRefineWarnings(linear, options, &result);
