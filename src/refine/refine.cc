@@ -953,42 +953,11 @@ struct PassStart {
   Effects rows_effects;
 };
 
-// Whether every body a chart would hold is one in `refined` (its estimated values, profiled included).
-bool ChartedBodiesAreBodies(const IdentificationResult& linear, const TlsSolution& refined) {
-  std::vector<int> fixed;
-  for (int k = 0; k < linear.system.num_parameters(); ++k)
-    if (!refined.essential[k] && !refined.Profiled(k)) fixed.push_back(k);
-  const Eigen::VectorXd chi = refined.profiled_chi.size() == refined.chi.size()
-                                  ? Eigen::VectorXd(refined.chi + refined.profiled_chi)
-                                  : refined.chi;
-  for (const internal::ChartedBody& body :
-       internal::ChartBodies(linear.system, ConfigurationMasses(linear.flights), fixed, chi, nullptr)) {
-    ConsistentBodyChart::Vector9 values;
-    for (int k = 0; k < kNumBodyParameters; ++k) values[k] = chi[body.columns[k]];
-    if (!CheckPhysicalConsistency(body.chart.mass(), BodyParameters::FromVector(values)).consistent) return false;
-  }
-  return true;
-}
-
-// A pass: the unconstrained one first; where its optimum is a body (the truth a body and the flights
-// fixing it) that is the constrained optimum, at the Euclidean block's cost. Else the pass again on the
-// charts (RefineOptions::consistent_bodies), whose exponential coordinates converge more slowly: on
-// charts throughout, a diagnosis of a simulated motor-lag flight took 190 iterations and 873 cost
-// evaluations for 110 and 284 (2.4 -> 4.9 s of CPU).
 RefineResult SolvePass(const IdentificationResult& linear, const PassStart& pass, const Effects& start,
                        const RefineOptions& options, bool start_pass) {
-  const auto solve = [&](const RefineOptions& o) {
-    return SolveEffects(linear.flights, linear.system,
-                        AnchorFlights(linear.flights, pass.rows_effects, linear.system, pass.tls, o), pass.tls, start,
-                        o, start_pass);
-  };
-  if (!options.consistent_bodies) return solve(options);
-  RefineOptions euclidean = options;
-  euclidean.consistent_bodies = false;
-  RefineResult result = solve(euclidean);
-  if (!ChartedBodiesAreBodies(linear, result.refined)) return solve(options);
-  result.body_constraint.notes.push_back("the unconstrained optimum is a body: the constrained one, no chart needed");
-  return result;
+  return SolveEffects(linear.flights, linear.system,
+                      AnchorFlights(linear.flights, pass.rows_effects, linear.system, pass.tls, options), pass.tls,
+                      start, options, start_pass);
 }
 
 // Settled when no effect coordinate moved by more than a tenth of its std (without a covariance: by
