@@ -83,15 +83,16 @@ bool ConsistentChiManifold::BodyJacobian(size_t b, const double* x, Eigen::Matri
 namespace {
 
 // Where a chart ends for the solver: U's diagonal e^d_i (the RMS extents of the mass, in m) between
-// 0.1 mm and 1 km and no smaller than e^-9 of the largest (a second-moment ratio of 1.5e-8, far
-// flatter than any airframe, and above CheckPhysicalConsistency's 1e-9 for flat; at 1 um a simulated
-// B's body ended 0.16 um thin, which the check calls flat), and the other coordinates (lengths in m)
-// within 1 km. Ceres' trust region also maps the whole gradient through Plus (its projected-gradient
-// test), a step of any size: it must land on a body.
+// 1 um and 1 km and no smaller than e^-12 of the largest (beyond it round-off in J's factorisation
+// could leave the chart), and the other coordinates (lengths in m) within 1 km. Ceres' trust region
+// also maps the whole gradient through Plus (its projected-gradient test), a step of any size: it must
+// land on a body. A body at that end is thinner than CheckPhysicalConsistency's 1e-9 for flat (a
+// simulated B ended 0.16 um thin); an end at 0.1 mm and e^-9 changed the independent simulator's
+// thrust-scale diagnosis (acc_bias added), so the end stays where the diagnoses were measured.
 void KeepOnChart(Eigen::VectorXd* coordinates) {
   Eigen::VectorXd& c = *coordinates;
   const double high = std::log(1e3);
-  const double low = std::max(std::min(c.head<3>().maxCoeff(), high) - 9.0, std::log(1e-4));
+  const double low = std::max(std::min(c.head<3>().maxCoeff(), high) - 12.0, std::log(1e-6));
   c.head<3>() = c.head<3>().cwiseMax(low).cwiseMin(high);
   c.tail(c.size() - 3) = c.tail(c.size() - 3).cwiseMax(-1e3).cwiseMin(1e3);
 }
