@@ -152,8 +152,8 @@ std::string ParameterTableText(const std::vector<std::string>& names, const TlsS
     const auto i = static_cast<Eigen::Index>(k);
     out << std::left << std::setw(static_cast<int>(width)) << names[k] << std::right << std::scientific
         << std::setprecision(4) << std::setw(14) << solution.chi[i] << std::setprecision(2) << std::setw(12)
-        << solution.std[i] << std::fixed << std::setprecision(2) << std::setw(10) << solution.rel_std_pct[i] << "  "
-        << (solution.essential[k] ? "yes" : "no (discarded)");
+        << ParameterStatisticsOf(names, solution, k).std << std::fixed << std::setprecision(2) << std::setw(10)
+        << solution.rel_std_pct[i] << "  " << (solution.essential[k] ? "yes" : "no (discarded)");
     // A discarded inertia the model still estimates and predicts with (PredictionChi), and the range a
     // physical body allows it.
     if (PredictsWithOtherValue(solution, static_cast<int>(k))) out << ", predicted with " << ShortNumber(predicted[i]);

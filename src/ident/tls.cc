@@ -496,11 +496,11 @@ double MinimumTlsCriterion(const Eigen::MatrixXd& w, const TlsSolution& solution
   return MinimumTlsCriterionOfColumns(SelectColumns(w, CriterionColumns(solution)), solution);
 }
 
-TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
-  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+namespace {
+
+// The parameters SolveIdim estimates, before the selection: every one but options.fixed_zero.
+std::vector<int> FreeParameters(const IdimSystem& system, const TlsOptions& options) {
   const int p = system.num_parameters();
-  TlsSolution solution;
-  solution.method = options.method;
   std::vector<int> free;
   for (int k = 0; k < p; ++k) {
     const bool fixed = std::find(options.fixed_zero.begin(), options.fixed_zero.end(), system.parameter_names[k]) !=
@@ -513,124 +513,101 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   if (free.empty()) throw Error("every parameter is fixed; nothing to identify");
   if (system.w.rows() <= p + 1)
     throw Error("too few rows (" + std::to_string(system.w.rows()) + ") for " + std::to_string(p) + " parameters");
+  return free;
+}
 
-  const GroupFactors factors = FactorGroups(system);
-  // Per group, set by the first (full-model) noise-aware solve; -1 until then.
-  std::vector<double> start_var(system.num_groups(), -1.0);
-  CoreSolve core;
-  // Discarded by the selection but kept in the criterion (TlsSolution::profiled): a parameter whose
-  // physics excludes 0 is not held there, since its signal would stay in the rows and move the
-  // parameters whose columns correlate with it.
+// The essential-parameter selection's state: the free columns, those discarded but kept in the
+// criterion (TlsSolution::profiled: a parameter whose physics excludes 0 is not held there, since its
+// signal would stay in the rows and move the parameters whose columns correlate with it), and the
+// discarded list.
+struct Selection {
+  std::vector<int> free;
   std::vector<int> profiled;
-  auto is_profiled = [&](int column) { return std::find(profiled.begin(), profiled.end(), column) != profiled.end(); };
-  auto discard = [&](DiscardedParameter dropped, int index_in_free) {
-    const bool profile = options.method == TlsMethod::kNoiseAware && PositiveByPhysics(dropped.name);
+  std::vector<DiscardedParameter> discarded;
+
+  bool IsProfiled(int column) const { return std::find(profiled.begin(), profiled.end(), column) != profiled.end(); }
+
+  // Discards free[index_in_free]: profiled (noise-aware, positive by physics) or out of the criterion.
+  void Discard(DiscardedParameter dropped, int index_in_free, TlsMethod method) {
+    const bool profile = method == TlsMethod::kNoiseAware && PositiveByPhysics(dropped.name);
     if (profile) dropped.reason += "; estimated beside the others, not held at 0 (its physics excludes 0)";
-    solution.discarded.push_back(dropped);
-    if (profile) {
-      profiled.push_back(free[index_in_free]);
-    } else {
+    discarded.push_back(dropped);
+    if (profile)
+      profiled.push_back(free[static_cast<size_t>(index_in_free)]);
+    else
       free.erase(free.begin() + index_in_free);
-    }
-  };
-  for (const std::string& name : options.discarded_from_start) {
-    const auto it = std::find_if(free.begin(), free.end(), [&](int k) { return system.parameter_names[k] == name; });
-    if (it == free.end()) throw Error("cannot discard '" + name + "': not a free parameter of these flights");
-    DiscardedParameter dropped;
-    dropped.name = name;
-    dropped.reason = "held discarded";
-    discard(dropped, static_cast<int>(it - free.begin()));
   }
-  while (true) {
-    std::vector<int> columns = free;
-    columns.push_back(p);
-    core = options.method == TlsMethod::kPaper ? SolvePaper(system, factors, columns, options)
-                                               : SolveNoiseAware(system, factors, columns, options, &start_var);
+
+  // An exact dependency among parameters (a symmetric quad's kd and I_zz): drops the one with the
+  // largest share of the null direction, naming its partner.
+  void DropConfounded(const CoreSolve& core, const IdimSystem& system) {
+    const int nf = static_cast<int>(free.size());
+    int first = 0, second = -1;
+    for (int k = 1; k < nf; ++k)
+      if (std::abs(core.direction[k]) > std::abs(core.direction[first])) first = k;
+    for (int k = 0; k < nf; ++k)
+      if (k != first && (second < 0 || std::abs(core.direction[k]) > std::abs(core.direction[second]))) second = k;
+    DiscardedParameter dropped;
+    dropped.name = system.parameter_names[free[first]];
+    dropped.rel_std_pct = std::numeric_limits<double>::infinity();
+    dropped.std = std::numeric_limits<double>::infinity();
+    dropped.most_correlated = second >= 0 ? system.parameter_names[free[second]] : "";
+    dropped.correlation = 1.0;
+    dropped.reason =
+        "not identifiable: only a combination with " + dropped.most_correlated + " is determined by these flights";
+    if (IsProfiled(free[first])) {  // discarded before for its %sigma: now it leaves the criterion
+      profiled.erase(std::find(profiled.begin(), profiled.end(), free[first]));
+      discarded.erase(std::find_if(discarded.begin(), discarded.end(),
+                                   [&](const DiscardedParameter& d) { return d.name == dropped.name; }));
+    }
+    discarded.push_back(dropped);
+    free.erase(free.begin() + first);
+  }
+
+  // Drops the worst free parameter by the selection rule (EssentialSelectionDrops); false when none.
+  bool DropWorst(const CoreSolve& core, const IdimSystem& system, const TlsOptions& options) {
     const int nf = static_cast<int>(free.size());
     Eigen::VectorXd rel(nf);
     for (int k = 0; k < nf; ++k)
-      rel[k] = 100.0 * std::sqrt(std::max(core.covariance(k, k), 0.0)) / std::max(std::abs(core.chi_t[k]), 1e-300);
-    if (!options.select_essential || nf <= 1) break;
-    if (core.scale_entry < kScaleLost) {
-      // An exact dependency among parameters (a symmetric quad's kd and I_zz): drop the one with the
-      // largest share of the null direction, name its partner, and go on.
-      int first = 0, second = -1;
-      for (int k = 1; k < nf; ++k)
-        if (std::abs(core.direction[k]) > std::abs(core.direction[first])) first = k;
-      for (int k = 0; k < nf; ++k)
-        if (k != first && (second < 0 || std::abs(core.direction[k]) > std::abs(core.direction[second]))) second = k;
-      DiscardedParameter dropped;
-      dropped.name = system.parameter_names[free[first]];
-      dropped.rel_std_pct = std::numeric_limits<double>::infinity();
-      dropped.std = std::numeric_limits<double>::infinity();
-      dropped.most_correlated = second >= 0 ? system.parameter_names[free[second]] : "";
-      dropped.correlation = 1.0;
-      dropped.reason =
-          "not identifiable: only a combination with " + dropped.most_correlated + " is determined by these flights";
-      if (is_profiled(free[first])) {  // discarded before for its %sigma: now it leaves the criterion
-        profiled.erase(std::find(profiled.begin(), profiled.end(), free[first]));
-        solution.discarded.erase(std::find_if(solution.discarded.begin(), solution.discarded.end(),
-                                              [&](const DiscardedParameter& d) { return d.name == dropped.name; }));
-      }
-      solution.discarded.push_back(dropped);
-      free.erase(free.begin() + first);
-      continue;
-    }
-    for (int k = 0; k < nf; ++k)
-      if (is_profiled(free[k])) rel[k] = -1.0;
-    int worst = 0;
-    rel.maxCoeff(&worst);
-    const bool stop = options.method == TlsMethod::kPaper ? rel.maxCoeff() / rel.minCoeff() < options.r_sigma
-                                                          : rel.maxCoeff() <= options.max_rel_std_pct;
-    if (stop) break;
-    DiscardedParameter dropped;
-    dropped.name = system.parameter_names[free[worst]];
-    dropped.rel_std_pct = rel[worst];
-    dropped.reason = "its %sigma exceeds the limit";
-    dropped.value = core.chi_t[worst];
-    dropped.std = std::sqrt(std::max(core.covariance(worst, worst), 0.0));
-    for (int k = 0; k < nf; ++k) {
-      if (k == worst) continue;
-      const double denom = std::sqrt(core.covariance(k, k) * core.covariance(worst, worst));
-      const double corr = denom > 0.0 ? core.covariance(k, worst) / denom : 0.0;
-      if (std::abs(corr) > std::abs(dropped.correlation)) {
-        dropped.correlation = corr;
-        dropped.most_correlated = system.parameter_names[free[k]];
-      }
-    }
-    discard(dropped, worst);
+      rel[k] = IsProfiled(free[k]) ? -1.0
+                                   : 100.0 * std::sqrt(std::max(core.covariance(k, k), 0.0)) /
+                                         std::max(std::abs(core.chi_t[k]), 1e-300);
+    const int worst = EssentialSelectionDrops(rel, options);
+    if (worst < 0) return false;
+    Discard(DiscardedOf(system.parameter_names, free, core.chi_t, core.covariance, worst, rel[worst]), worst,
+            options.method);
+    return true;
   }
+};
 
+// The solution of the selection's last solve.
+TlsSolution SolutionOf(const IdimSystem& system, const TlsOptions& options, const Selection& selection,
+                       const CoreSolve& core) {
+  const int p = system.num_parameters();
+  const std::vector<int>& free = selection.free;
   const int nf = static_cast<int>(free.size());
+  TlsSolution solution;
+  solution.method = options.method;
+  solution.discarded = selection.discarded;
   solution.chi = Eigen::VectorXd::Zero(p);
   solution.essential.assign(p, false);
   solution.covariance = Eigen::MatrixXd::Zero(p, p);
-  for (int a = 0; a < nf; ++a) {
-    if (is_profiled(free[a])) continue;
-    solution.chi[free[a]] = core.chi_t[a];
-    solution.essential[free[a]] = true;
-    for (int b = 0; b < nf; ++b)
-      if (!is_profiled(free[b])) solution.covariance(free[a], free[b]) = core.covariance(a, b);
-  }
   solution.profiled.assign(p, false);
   solution.profiled_chi = Eigen::VectorXd::Zero(p);
   solution.profiled_std = Eigen::VectorXd::Zero(p);
-  for (int a = 0; a < nf; ++a)
-    if (is_profiled(free[a])) {
+  for (int a = 0; a < nf; ++a) {
+    if (selection.IsProfiled(free[a])) {
       solution.profiled[free[a]] = true;
       solution.profiled_chi[free[a]] = core.chi_t[a];
       solution.profiled_std[free[a]] = std::sqrt(std::max(core.covariance(a, a), 0.0));
+      continue;
     }
-  solution.std = solution.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  solution.rel_std_pct = Eigen::VectorXd::Zero(p);
-  for (int k = 0; k < p; ++k)
-    if (solution.chi[k] != 0.0) solution.rel_std_pct[k] = 100.0 * solution.std[k] / std::abs(solution.chi[k]);
-  // The discarded parameters keep the %sigma they had when they were dropped.
-  for (const DiscardedParameter& d : solution.discarded) {
-    const int k = static_cast<int>(std::find(system.parameter_names.begin(), system.parameter_names.end(), d.name) -
-                                   system.parameter_names.begin());
-    solution.rel_std_pct[k] = d.rel_std_pct;
+    solution.chi[free[a]] = core.chi_t[a];
+    solution.essential[free[a]] = true;
+    for (int b = 0; b < nf; ++b)
+      if (!selection.IsProfiled(free[b])) solution.covariance(free[a], free[b]) = core.covariance(a, b);
   }
+  SetStdFromCovariance(system.parameter_names, &solution);
   solution.row_weight = core.row_weight;
   solution.column_metric = Eigen::MatrixXd::Zero(p + 1, p + 1);
   std::vector<int> columns = free;
@@ -641,24 +618,113 @@ TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
   solution.singular_values = core.singular_values;
   solution.scale_entry = core.scale_entry;
   solution.iterations = core.iterations;
+  return solution;
+}
 
-  // Is the result usable? The scale, kt, and physical plausibility per configuration.
+// Is the result usable? The scale and kt; a negative kd is a warning.
+void JudgeUsable(TlsSolution* solution) {
   auto fail = [&](const std::string& message) {
-    solution.usable = false;
-    if (solution.message.empty()) solution.message = message;
+    solution->usable = false;
+    if (solution->message.empty()) solution->message = message;
   };
-  if (solution.scale_entry < kScaleLost) {
+  if (solution->scale_entry < kScaleLost) {
     char buffer[64];
-    std::snprintf(buffer, sizeof(buffer), "%.1e", solution.scale_entry);
+    std::snprintf(buffer, sizeof(buffer), "%.1e", solution->scale_entry);
     fail("scale lost: the solution vector's last entry is " + std::string(buffer) +
          " (near 0), so these flights cannot fix the parameters' scale; typical causes are a systematic force "
          "error (accelerometer bias, IMU misalignment) or a thrust that barely varies");
   }
-  if (!solution.essential[0] || !(solution.chi[0] > 0.0))
-    fail("kt could not be identified (value " + std::to_string(solution.chi[0]) +
+  if (!solution->essential[0] || !(solution->chi[0] > 0.0))
+    fail("kt could not be identified (value " + std::to_string(solution->chi[0]) +
          "); the flights do not excite the thrust enough or the scale is lost");
-  if (solution.essential[1] && !(solution.chi[1] > 0.0))
-    solution.warnings.push_back("kd came out negative: check the rotors' spin directions in the vehicle file");
+  if (solution->essential[1] && !(solution->chi[1] > 0.0))
+    solution->warnings.push_back("kd came out negative: check the rotors' spin directions in the vehicle file");
+}
+
+}  // namespace
+
+int EssentialSelectionDrops(const Eigen::VectorXd& rel_std_pct, const TlsOptions& options) {
+  if (!options.select_essential) return -1;
+  int worst = -1, candidates = 0;
+  double smallest = std::numeric_limits<double>::infinity();
+  for (Eigen::Index k = 0; k < rel_std_pct.size(); ++k) {
+    if (rel_std_pct[k] < 0.0) continue;
+    ++candidates;
+    smallest = std::min(smallest, rel_std_pct[k]);
+    if (worst < 0 || rel_std_pct[k] > rel_std_pct[worst]) worst = static_cast<int>(k);
+  }
+  if (worst < 0 || rel_std_pct.size() <= 1) return -1;
+  const bool keep = options.method == TlsMethod::kPaper ? rel_std_pct[worst] / smallest < options.r_sigma
+                                                        : rel_std_pct[worst] <= options.max_rel_std_pct;
+  return keep ? -1 : worst;
+}
+
+DiscardedParameter DiscardedOf(const std::vector<std::string>& names, const std::vector<int>& columns,
+                               const Eigen::VectorXd& chi, const Eigen::MatrixXd& covariance, int dropped,
+                               double rel_std_pct) {
+  DiscardedParameter d;
+  d.name = names[static_cast<size_t>(columns[static_cast<size_t>(dropped)])];
+  d.rel_std_pct = rel_std_pct;
+  d.reason = "its %sigma exceeds the limit";
+  d.value = chi[dropped];
+  d.std = std::sqrt(std::max(covariance(dropped, dropped), 0.0));
+  for (int k = 0; k < static_cast<int>(columns.size()); ++k) {
+    if (k == dropped) continue;
+    const double denom = std::sqrt(covariance(k, k) * covariance(dropped, dropped));
+    const double corr = denom > 0.0 ? covariance(k, dropped) / denom : 0.0;
+    if (std::abs(corr) > std::abs(d.correlation)) {
+      d.correlation = corr;
+      d.most_correlated = names[static_cast<size_t>(columns[static_cast<size_t>(k)])];
+    }
+  }
+  return d;
+}
+
+void SetStdFromCovariance(const std::vector<std::string>& names, TlsSolution* solution) {
+  const Eigen::Index p = solution->covariance.rows();
+  solution->std = solution->covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  solution->rel_std_pct = Eigen::VectorXd::Zero(p);
+  for (Eigen::Index k = 0; k < p; ++k)
+    if (solution->chi[k] != 0.0) solution->rel_std_pct[k] = 100.0 * solution->std[k] / std::abs(solution->chi[k]);
+  // A discarded parameter keeps the %sigma it had when it was dropped (0 would read as exactly known);
+  // its std stays 0 beside its value 0, and DiscardedParameter::std holds the one at the drop.
+  for (const DiscardedParameter& d : solution->discarded) {
+    const auto it = std::find(names.begin(), names.end(), d.name);
+    if (it != names.end()) solution->rel_std_pct[it - names.begin()] = d.rel_std_pct;
+  }
+}
+
+TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options) {
+  if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
+  Selection selection;
+  selection.free = FreeParameters(system, options);
+  for (const std::string& name : options.discarded_from_start) {
+    const auto it = std::find_if(selection.free.begin(), selection.free.end(),
+                                 [&](int k) { return system.parameter_names[k] == name; });
+    if (it == selection.free.end()) throw Error("cannot discard '" + name + "': not a free parameter of these flights");
+    DiscardedParameter dropped;
+    dropped.name = name;
+    dropped.reason = "held discarded";
+    selection.Discard(dropped, static_cast<int>(it - selection.free.begin()), options.method);
+  }
+  const GroupFactors factors = FactorGroups(system);
+  // Per group, set by the first (full-model) noise-aware solve; -1 until then.
+  std::vector<double> start_var(system.num_groups(), -1.0);
+  CoreSolve core;
+  while (true) {
+    std::vector<int> columns = selection.free;
+    columns.push_back(system.num_parameters());
+    core = options.method == TlsMethod::kPaper ? SolvePaper(system, factors, columns, options)
+                                               : SolveNoiseAware(system, factors, columns, options, &start_var);
+    if (!options.select_essential || selection.free.size() <= 1) break;
+    if (core.scale_entry < kScaleLost) {
+      selection.DropConfounded(core, system);
+      continue;
+    }
+    if (!selection.DropWorst(core, system, options)) break;
+  }
+  TlsSolution solution = SolutionOf(system, options, selection, core);
+  JudgeUsable(&solution);
   return solution;
 }
 

@@ -37,19 +37,16 @@ BodyParameters BodyOfSecondMoments(double mass_kg, const Eigen::Vector3d& c, con
   return body;
 }
 
-// (chi(theta) - chi0) whitened by sqrt_information, with theta's alpha held at the known mass.
+// (chi(coordinates) - chi0) whitened by sqrt_information, on a chart with the known mass held.
 struct ProjectionResidual {
-  double alpha;
+  const ConsistentBodyChart* chart;
   Eigen::Matrix<double, kNumBodyParameters, 1> chi0;
   Eigen::MatrixXd sqrt_information;
 
   template <typename T>
-  bool operator()(const T* free_theta, T* residual) const {
-    T theta[kNumLogCholesky];
-    theta[0] = T(alpha);
-    for (int k = 1; k < kNumLogCholesky; ++k) theta[k] = free_theta[k - 1];
-    T chi[kNumBodyParameters], mass;
-    BodyFromLogCholesky(theta, chi, &mass);
+  bool operator()(T const* const* coordinates, T* residual) const {
+    T chi[kNumBodyParameters];
+    chart->Body(coordinates[0], chi);
     for (Eigen::Index r = 0; r < sqrt_information.rows(); ++r) {
       residual[r] = T(0.0);
       for (int k = 0; k < kNumBodyParameters; ++k) residual[r] += sqrt_information(r, k) * (chi[k] - chi0[k]);
@@ -163,43 +160,88 @@ InertiaRange AllowedDiagonalInertia(double mass_kg, const BodyParameters& body, 
   return AllowedInertiaShift(mass_kg, without, direction);
 }
 
-Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const BodyParameters& body) {
-  const PhysicalConsistency check = CheckPhysicalConsistency(mass_kg, body);
-  if (!check.consistent) throw Error("no log-Cholesky parameters: not a physical body: " + check.problem);
-  // J = U U^T with U upper triangular, from the bottom right: U_33 = sqrt(m), U_i3 = ms_i / U_33, and
-  // the rest factors J's Schur complement, Sigma_c = (tr(I_c)/2) 1 - I_c.
+namespace {
+
+// theta of the body `chi` (ToVector's order) of mass m: J = U U^T with U upper triangular, from the bottom
+// right: U_33 = sqrt(m), U_i3 = ms_i / U_33, and the rest factors J's Schur complement
+// Sigma_c = Sigma - ms ms^T / m. False when a pivot is not positive (J not positive definite).
+bool LogCholeskyFactor(double mass_kg, const Eigen::Matrix<double, kNumBodyParameters, 1>& chi,
+                       Eigen::Matrix<double, kNumLogCholesky, 1>* theta) {
+  if (!(mass_kg > 0.0) || !chi.allFinite()) return false;
+  const BodyParameters body = BodyParameters::FromVector(chi);
   Eigen::Matrix4d u = Eigen::Matrix4d::Zero();
   u(3, 3) = std::sqrt(mass_kg);
   u.topRightCorner<3, 1>() = body.first_moment / u(3, 3);
-  Eigen::Matrix3d rest = SecondMoments(check.inertia_at_com);
+  const Eigen::Matrix3d symmetric = 0.5 * (body.inertia + body.inertia.transpose());
+  Eigen::Matrix3d rest = SecondMoments(symmetric) - u.topRightCorner<3, 1>() * u.topRightCorner<3, 1>().transpose();
   for (int k = 2; k >= 0; --k) {
+    if (!(rest(k, k) > 0.0)) return false;
     u(k, k) = std::sqrt(rest(k, k));
     for (int i = 0; i < k; ++i) u(i, k) = rest(i, k) / u(k, k);
     for (int i = 0; i < k; ++i)
       for (int j = 0; j < k; ++j) rest(i, j) -= u(i, k) * u(j, k);
   }
   const double scale = u(3, 3);
-  Eigen::Matrix<double, kNumLogCholesky, 1> theta;
-  theta << std::log(scale), std::log(u(0, 0) / scale), std::log(u(1, 1) / scale), std::log(u(2, 2) / scale),
+  *theta << std::log(scale), std::log(u(0, 0) / scale), std::log(u(1, 1) / scale), std::log(u(2, 2) / scale),
       u(0, 1) / scale, u(1, 2) / scale, u(0, 2) / scale, u(0, 3) / scale, u(1, 3) / scale, u(2, 3) / scale;
+  return true;
+}
+
+// theta's entry that a held body parameter fixes (ms_i: t_i; a product of inertia: its s_ij), -1 for
+// the diagonal inertia.
+constexpr std::array<int, kNumBodyParameters> kThetaOfHeldParameter = {7, 8, 9, -1, -1, -1, 4, 6, 5};
+
+}  // namespace
+
+Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const BodyParameters& body) {
+  const PhysicalConsistency check = CheckPhysicalConsistency(mass_kg, body);
+  if (!check.consistent) throw Error("no log-Cholesky parameters: not a physical body: " + check.problem);
+  Eigen::Matrix<double, kNumLogCholesky, 1> theta;
+  if (!LogCholeskyFactor(mass_kg, body.ToVector(), &theta))
+    throw Error("no log-Cholesky parameters: the pseudo-inertia is not positive definite");
   return theta;
+}
+
+ConsistentBodyChart::ConsistentBodyChart(double mass_kg, const std::array<bool, kNumBodyParameters>& held,
+                                         const Vector9& held_value)
+    : mass_(mass_kg), alpha_(0.5 * std::log(mass_kg)), held_(held), held_value_(held_value) {
+  if (!(mass_kg > 0.0)) throw Error("a chart of consistent bodies needs a positive mass, got " + ShortNumber(mass_kg));
+  std::array<bool, kNumLogCholesky> fixed{};
+  for (int k = 0; k < kNumBodyParameters; ++k) {
+    if (!held[k]) continue;
+    if (kThetaOfHeldParameter[k] < 0)
+      throw Error(std::string("a chart of consistent bodies cannot hold ") + kBodyParameterNames[k] +
+                  ": no body has a diagonal inertia of 0");
+    fixed[kThetaOfHeldParameter[k]] = true;
+  }
+  for (int t = 1; t < kNumLogCholesky; ++t)
+    if (!fixed[t]) free_theta_.push_back(t);
+}
+
+bool ConsistentBodyChart::Coordinates(const Vector9& chi, Eigen::VectorXd* coordinates) const {
+  Eigen::Matrix<double, kNumLogCholesky, 1> theta;
+  if (!LogCholeskyFactor(mass_, chi, &theta)) return false;
+  coordinates->resize(dimension());
+  for (int k = 0; k < dimension(); ++k) (*coordinates)[k] = theta[free_theta_[k]];
+  return true;
 }
 
 namespace {
 
-// One Ceres descent from a consistent body, and the projection it ends at.
-ConsistentProjection DescendFrom(double mass_kg, const BodyParameters& estimate,
+// One Ceres descent on `chart` from a body (its coordinates: ConsistentBodyChart::Coordinates), and the
+// projection it ends at.
+ConsistentProjection DescendFrom(const ConsistentBodyChart& chart, const BodyParameters& estimate,
                                  const Eigen::MatrixXd& sqrt_information,
                                  const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
                                  const BodyParameters& start_body) {
-  const Eigen::Matrix<double, kNumLogCholesky, 1> start = LogCholeskyOf(mass_kg, start_body);
-  double free_theta[kNumLogCholesky - 1];
-  for (int k = 1; k < kNumLogCholesky; ++k) free_theta[k - 1] = start[k];
-  const auto rows = static_cast<int>(sqrt_information.rows());
+  Eigen::VectorXd coordinates;
+  if (!chart.Coordinates(start_body.ToVector(), &coordinates)) throw Error("the projection's start is no body");
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<ProjectionResidual, kNumBodyParameters>(
+      new ProjectionResidual{&chart, estimate.ToVector(), sqrt_information});
+  cost->AddParameterBlock(chart.dimension());
+  cost->SetNumResiduals(static_cast<int>(sqrt_information.rows()));
   ceres::Problem problem;
-  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ProjectionResidual, ceres::DYNAMIC, kNumLogCholesky - 1>(
-                               new ProjectionResidual{start[0], estimate.ToVector(), sqrt_information}, rows),
-                           nullptr, free_theta);
+  problem.AddResidualBlock(cost, nullptr, coordinates.data());
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = 500;
@@ -210,16 +252,23 @@ ConsistentProjection DescendFrom(double mass_kg, const BodyParameters& estimate,
   ceres::Solve(options, &problem, &summary);
   ConsistentProjection out;
   out.converged = summary.IsSolutionUsable();
-  double theta[kNumLogCholesky], chi[kNumBodyParameters], mass = 0.0;
-  theta[0] = start[0];
-  for (int k = 1; k < kNumLogCholesky; ++k) theta[k] = free_theta[k - 1];
-  BodyFromLogCholesky(theta, chi, &mass);
-  out.body = BodyParameters::FromVector(Eigen::Map<const Eigen::Matrix<double, kNumBodyParameters, 1>>(chi));
+  // A chart holding parameters keeps its end inside, where its J is positive definite beyond round-off:
+  // U's diagonal (e^d_i, the RMS extents of the mass left after the rows below, in m) at least 1 mm and
+  // e^-7 (a millionth in second moment) of its largest, as RepairedBody keeps a body.
+  if (chart.dimension() < kNumLogCholesky - 1) {
+    const double floor = std::max(coordinates.head<3>().maxCoeff() - 7.0, std::log(1e-3));
+    coordinates.head<3>() = coordinates.head<3>().cwiseMax(floor);
+  }
+  Eigen::Matrix<double, kNumBodyParameters, 1> chi;
+  chart.Body(coordinates.data(), chi.data());
+  out.body = BodyParameters::FromVector(chi);
   // The minimum lies on the boundary (J singular), which the parameterisation approaches without
   // reaching: where the solver stopped closer than CheckPhysicalConsistency tells from flat, the body
-  // keeps a millionth of its largest second moment along that axis.
-  if (const PhysicalConsistency reached = CheckPhysicalConsistency(mass_kg, out.body); !reached.consistent)
-    out.body = RepairedBody(mass_kg, reached, 1e-6);
+  // keeps a millionth of its largest second moment along that axis (a chart holding parameters was kept
+  // inside above: the repair would move what it holds).
+  if (const PhysicalConsistency reached = CheckPhysicalConsistency(chart.mass(), out.body);
+      !reached.consistent && chart.dimension() == kNumLogCholesky - 1)
+    out.body = RepairedBody(chart.mass(), reached, 1e-6);
   const Eigen::Matrix<double, kNumBodyParameters, 1> projected = out.body.ToVector();
   out.distance_std = (sqrt_information * (projected - estimate.ToVector())).norm();
   for (int k = 0; k < kNumBodyParameters; ++k) {
@@ -235,7 +284,8 @@ ConsistentProjection DescendFrom(double mass_kg, const BodyParameters& estimate,
 ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParameters& estimate,
                                                  const Eigen::MatrixXd& sqrt_information,
                                                  const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
-                                                 const BodyParameters* start_body) {
+                                                 const BodyParameters* start_body,
+                                                 const std::array<bool, kNumBodyParameters>& held) {
   if (sqrt_information.cols() != kNumBodyParameters)
     throw Error("ProjectOntoConsistentBodies: the information factor needs one column per body parameter");
   ConsistentProjection out;
@@ -251,9 +301,10 @@ ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParam
   std::vector<BodyParameters> starts = {RepairedBody(mass_kg, check, 1e-3), RepairedBody(mass_kg, check, 1e-1)};
   if (start_body) starts.push_back(*start_body);
   out.distance_std = std::numeric_limits<double>::infinity();
+  const ConsistentBodyChart chart(mass_kg, held, estimate.ToVector());
   for (const BodyParameters& start : starts) {
     if (!CheckPhysicalConsistency(mass_kg, start).consistent) continue;
-    const ConsistentProjection descent = DescendFrom(mass_kg, estimate, sqrt_information, std_dev, start);
+    const ConsistentProjection descent = DescendFrom(chart, estimate, sqrt_information, std_dev, start);
     if (descent.distance_std < out.distance_std) out = descent;
   }
   if (!std::isfinite(out.distance_std)) out.distance_std = 0.0, out.body = estimate;

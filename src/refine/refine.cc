@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <numeric>
 
+#include "refine/consistent_chi.h"
 #include "refine/grid_search.h"
 #include "refine/idim_residual.h"
 #include "rotorid/core/error.h"
@@ -161,6 +163,7 @@ Eigen::MatrixXd JacobianFactor(ceres::Problem* problem, const std::vector<double
 // columns) and the check of effects resting on discarded parameters (all of them).
 struct SolutionJacobian {
   Eigen::MatrixXd factor;
+  Eigen::VectorXd gradient;  // of the cost, in the factor's columns
   int chi_columns = 0;
 };
 
@@ -309,6 +312,8 @@ struct EffectProblem {
   std::vector<Eigen::MatrixXd> held_directions;  // per free effect (HeldDirections)
   std::vector<double*> blocks_of_residual;     // scaled_chi, then each free effect's block
   std::vector<int> fixed, free;                // chi coordinates held at 0 / estimated
+  std::vector<internal::ChartedBody> charts;   // the bodies kept physical (RefineOptions::consistent_bodies)
+  BodyConstraint constraint;
   std::vector<std::unique_ptr<RotorSignalCache>> caches;
   std::vector<internal::RotorMomentAnchor> anchors;
   std::vector<ceres::ResidualBlockId> residual_blocks;
@@ -332,8 +337,16 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
   ep->context.chi_scale.resize(p);
   // The profiled parameters start at their estimate (TlsSolution::profiled).
   const bool profiled = tls.profiled_chi.size() == p;
-  const Eigen::VectorXd start_chi = profiled ? tls.chi + tls.profiled_chi : tls.chi;
+  Eigen::VectorXd start_chi = profiled ? tls.chi + tls.profiled_chi : tls.chi;
   const Eigen::VectorXd start_std = profiled ? tls.std + tls.profiled_std : tls.std;
+  for (int k = 0; k < p; ++k) (tls.essential[k] || tls.Profiled(k) ? ep->free : ep->fixed).push_back(k);
+  if (options.consistent_bodies && !ep->free.empty()) {
+    BodyConstraint& constraint = ep->constraint;
+    ep->charts = internal::ChartBodies(system, ConfigurationMasses(flights), ep->fixed, start_chi, &constraint.notes);
+    for (const internal::ChartedBody& body : ep->charts) constraint.charted.push_back(body.name);
+    constraint.start_distance_std =
+        internal::ProjectStartOntoCharts(ep->charts, tls, &start_chi, &constraint.start_moved);
+  }
   for (int k = 0; k < p; ++k) ep->context.chi_scale[k] = std::max({std::abs(start_chi[k]), start_std[k], 1e-12});
   ep->scaled_chi = start_chi.cwiseQuotient(ep->context.chi_scale);
   const Vehicle& vehicle = flights.front().vehicle;
@@ -351,7 +364,6 @@ void SetUpParameterBlocks(const std::vector<ProcessedFlight>& flights, const Idi
   }
   ep->blocks_of_residual = {ep->scaled_chi.data()};
   for (Eigen::VectorXd& v : ep->effect_values) ep->blocks_of_residual.push_back(v.data());
-  for (int k = 0; k < p; ++k) (tls.essential[k] || tls.Profiled(k) ? ep->free : ep->fixed).push_back(k);
   const bool kd_free = KdFree(system, tls);
   for (EffectKind kind : ep->effect_blocks.free) ep->held_directions.push_back(HeldDirections(kind, vehicle, kd_free));
 }
@@ -393,15 +405,22 @@ void AddRowResiduals(const std::vector<ProcessedFlight>& flights, const IdimLayo
   }
 }
 
+// The chi block's manifold: the charts of its bodies (and the held coordinates), else the held
+// coordinates' subset; null when every coordinate is free and no body is charted.
+ceres::Manifold* ChiManifold(const EffectProblem& ep) {
+  if (!ep.charts.empty())
+    return new internal::ConsistentChiManifold(ep.context.num_parameters, ep.fixed, ep.charts, ep.context.chi_scale);
+  return ep.fixed.empty() ? nullptr : new ceres::SubsetManifold(ep.context.num_parameters, ep.fixed);
+}
+
 // Discarded (non-essential) parameters stay at zero, as in the TLS step (the profiled ones are
 // estimated there and here: TlsSolution::profiled); effects within their bounds; a zero-sum
 // effect's sum and the held coordinates pinned.
 void ConstrainParameters(const RefineOptions& options, EffectProblem* ep) {
-  const int p = ep->context.num_parameters;
   if (ep->free.empty()) {
     ep->problem->SetParameterBlockConstant(ep->scaled_chi.data());
-  } else if (!ep->fixed.empty()) {
-    ep->problem->SetManifold(ep->scaled_chi.data(), new ceres::SubsetManifold(p, ep->fixed));
+  } else if (ceres::Manifold* manifold = ChiManifold(*ep)) {
+    ep->problem->SetManifold(ep->scaled_chi.data(), manifold);
   }
   for (size_t b = 0; b < ep->effect_blocks.free.size(); ++b) {
     const auto [lower, upper] = RefineBounds(ep->effect_blocks.free[b], options);
@@ -656,11 +675,18 @@ SolutionJacobian FactorSolutionJacobian(EffectProblem* ep, int num_threads) {
   }
   for (Eigen::VectorXd& v : ep->effect_values) blocks.push_back(v.data());
   if (blocks.empty()) return jacobian;
-  const bool has_manifold = !ep->free.empty() && !ep->fixed.empty();
+  const bool has_manifold = !ep->free.empty() && (!ep->fixed.empty() || !ep->charts.empty());
   if (has_manifold) ep->problem->SetManifold(ep->scaled_chi.data(), nullptr);
   jacobian.factor = JacobianFactor(ep->problem.get(), blocks, ep->residual_blocks, num_threads);
-  if (has_manifold)
-    ep->problem->SetManifold(ep->scaled_chi.data(), new ceres::SubsetManifold(ep->context.num_parameters, ep->fixed));
+  if (!ep->charts.empty()) {
+    ceres::Problem::EvaluateOptions evaluate;
+    evaluate.parameter_blocks = blocks;
+    evaluate.num_threads = num_threads;
+    std::vector<double> gradient;
+    ep->problem->Evaluate(evaluate, nullptr, nullptr, &gradient, nullptr);
+    jacobian.gradient = Eigen::Map<const Eigen::VectorXd>(gradient.data(), static_cast<Eigen::Index>(gradient.size()));
+  }
+  if (has_manifold) ep->problem->SetManifold(ep->scaled_chi.data(), ChiManifold(*ep));
   return jacobian;
 }
 
@@ -696,6 +722,30 @@ std::string WhatATradingPairFixes(const RefineResult& result, int a, int b) {
   const std::string& unit = first->info().display_unit.empty() ? first->info().unit : first->info().display_unit;
   return "; what the data fix is " + first->parameter_name() + " + " + second->parameter_name() + " = " +
          FormatValue("%.3g", scale * sum) + " +- " + FormatValue("%.2g", scale * sum_std) + " " + unit;
+}
+
+// The distance of the unconstrained optimum from the solution on the charts, in the solution's std: the
+// Gauss-Newton step from it with the charts lifted, -H^-1 g (H = J^T J = V S^2 V^T over the free chi
+// and effect coordinates, g the cost's gradient over the free chi coordinates; an effect's own gradient,
+// at a bound, is left out), whose length in the metric of the covariance scale H^-1 is
+// sqrt(g^T H^-1 g / scale). At an optimum inside the charts g is 0: the constrained estimate is the
+// unconstrained one.
+void NoteUnconstrainedDistance(const EffectProblem& ep, const IdimLayout& system,
+                               const Eigen::JacobiSVD<Eigen::MatrixXd>& svd, double scale,
+                               const Eigen::VectorXd& gradient, const Eigen::VectorXd& variance,
+                               BodyConstraint* constraint) {
+  const Eigen::VectorXd projected = svd.matrixV().transpose() * gradient;
+  const Eigen::VectorXd step =
+      -(svd.matrixV() * svd.singularValues().cwiseAbs2().cwiseInverse().asDiagonal() * projected);
+  constraint->unconstrained_distance_std = std::sqrt(std::max(0.0, -gradient.dot(step)) / scale);
+  double largest = 0.0;
+  for (size_t a = 0; a < ep.free.size(); ++a) {
+    const auto i = static_cast<Eigen::Index>(a);
+    const double move = variance[i] > 0.0 ? std::abs(step[i]) / std::sqrt(variance[i]) : 0.0;
+    if (move <= largest) continue;
+    largest = move;
+    constraint->largest_move = system.parameter_names[ep.free[a]] + " " + ShortNumber(move) + " std";
+  }
 }
 
 // The covariance of chi and the effects at the solution, scaled by the observed residual variance
@@ -735,6 +785,11 @@ void ComputeRefinedCovariance(const EffectProblem& ep, const SolutionJacobian& j
   const Eigen::MatrixXd full =
       scale * (svd.matrixV() * sv.cwiseAbs2().cwiseInverse().asDiagonal() * svd.matrixV().transpose());
   result->has_covariance = true;
+  if (jacobian.gradient.size() > 0) {
+    Eigen::VectorXd gradient = jacobian.gradient(columns);
+    gradient.tail(gradient.size() - static_cast<Eigen::Index>(ep.free.size())).setZero();
+    NoteUnconstrainedDistance(ep, system, svd, scale, gradient, full.diagonal(), &result->body_constraint);
+  }
   const std::vector<int>& free = ep.free;
   const Eigen::VectorXd& chi_scale = ep.context.chi_scale;
   const int offset = static_cast<int>(free.size());
@@ -798,19 +853,14 @@ RefineResult SolveEffects(const std::vector<ProcessedFlight>& flights, const Idi
   const Eigen::VectorXd residuals = Eigen::Map<const Eigen::VectorXd>(residual_values.data(), residual_values.size());
   result.autocorrelation_factor = ComponentAutocorrelationFactor(residuals);
   const std::vector<std::string> effect_labels = FreeEffectLabels(ep);
+  result.body_constraint = ep.constraint;
   // A report for people: fits that skip the covariance (diagnosis folds, ablation) skip it too.
   if (options.compute_covariance) {
     const SolutionJacobian jacobian = FactorSolutionJacobian(&ep, options.num_threads);
     if (!ep.free.empty()) NoteEffectsRestingOnDiscarded(ep, jacobian, system, effect_labels, &result);
     ComputeRefinedCovariance(ep, jacobian, system, cost, residuals.size(), effect_labels, &result);
   }
-  result.refined.std = result.refined.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  for (int k = 0; k < chi.size(); ++k)
-    if (chi[k] != 0.0) result.refined.rel_std_pct[k] = 100.0 * result.refined.std[k] / std::abs(chi[k]);
-  // As in SolveIdim: a discarded parameter keeps the %sigma it had when the selection dropped it (0
-  // would read as exactly known).
-  for (const DiscardedParameter& d : result.refined.discarded)
-    if (const int k = system.Column(d.name); k >= 0) result.refined.rel_std_pct[k] = d.rel_std_pct;
+  SetStdFromCovariance(system.parameter_names, &result.refined);
   SetAllowedRanges(system, ConfigurationMasses(flights), &result.refined);
   return result;
 }
@@ -872,12 +922,183 @@ TlsSolution ReselectEssential(const IdimSystem& corrected, const IdentificationR
              : SolveIdim(corrected, holding);
 }
 
+// A refined estimate the charts held far from the unconstrained optimum, or a start far from every body,
+// is a finding: the flights, or the model, put the parameters where no body is.
+void NoteBodyConstraint(RefineResult* result) {
+  const BodyConstraint& c = result->body_constraint;
+  if (c.unconstrained_distance_std > kFarFromABodyStd)
+    result->warnings.push_back(
+        "physical_consistency: the unconstrained refined estimate lies " + ShortNumber(c.unconstrained_distance_std) +
+        " std from the physically consistent one reported (most in " + c.largest_move +
+        "): the flights or the model put the parameters where no body is (a first moment or inertia they do not fix, "
+        "or an effect the model lacks)");
+  if (c.start_distance_std > kFarFromABodyStd)
+    result->warnings.push_back("physical_consistency: the TLS estimate that started the refinement is no body (" +
+                               Join(c.start_moved) + " from the nearest one in its metric)");
+}
+
 }  // namespace
 
 int RefineSteps(const RefineOptions& options) {
   const bool reselects = options.reselect_essential && !options.effects.empty();
   return (SearchesDelayGrid(options) ? 1 : 0) + (reselects ? kMaxRefinePasses : 1);
 }
+
+namespace {
+
+// What a pass started from: the TLS (its weights, metric and essential set) and the effects of the
+// rows that TLS was solved on (its anchors'). The layout is the linear system's throughout.
+struct PassStart {
+  TlsSolution tls;
+  Effects rows_effects;
+};
+
+RefineResult SolvePass(const IdentificationResult& linear, const PassStart& pass, const Effects& start,
+                       const RefineOptions& options, bool start_pass) {
+  return SolveEffects(linear.flights, linear.system,
+                      AnchorFlights(linear.flights, pass.rows_effects, linear.system, pass.tls, options), pass.tls,
+                      start, options, start_pass);
+}
+
+// Settled when no effect coordinate moved by more than a tenth of its std (without a covariance: by
+// more than the effect's settle tolerance).
+bool EffectsSettled(const RefineResult& result, const Effects& previous, const RefineOptions& options) {
+  for (EffectKind kind : options.effects) {
+    const Eigen::VectorXd change = (result.effects.Get(kind) - previous.Get(kind)).cwiseAbs();
+    const Eigen::VectorXd std_dev = result.effects_std.Get(kind);
+    for (Eigen::Index k = 0; k < change.size(); ++k) {
+      const double tolerance =
+          k < std_dev.size() && std_dev[k] > 0.0 ? 0.1 * std_dev[k] : kind->info().settle_tolerance;
+      if (change[k] > tolerance + 1e-12) return false;
+    }
+  }
+  return true;
+}
+
+// The TLS weights and equation-error variances of the linear step were fitted to the residual of the
+// uncorrected rows (a delay inflates the yaw equation's error, say), and its essential set to their
+// precision. Re-runs the TLS, weights and selection included, on the rows corrected by the estimated
+// effects, and refines again from there, until the effects settle. `result` is the first pass's;
+// `pass` becomes the start of the pass whose result stands. Returns a warning, or empty.
+std::string RefineReselected(const IdentificationResult& linear, const RefineOptions& options,
+                             const std::function<void()>& step_done, RefineResult* result, PassStart* pass) {
+  RefineOptions next = options;
+  next.coarse_delay_search = false;
+  Effects previous = result->effects;
+  std::string held;  // of the pass whose result stands
+  for (int pass_number = 2; pass_number <= kMaxRefinePasses; ++pass_number) {
+    IdimSystem corrected{linear.system, SystemRowsWithEffects(linear, result->effects)};
+    std::string pass_held;
+    PassStart candidate_start{ReselectEssential(corrected, linear, &pass_held), result->effects};
+    corrected.w = Eigen::MatrixXd();  // the pass needs its layout only; the rows are 100 MB on a 1 h log
+    if (!candidate_start.tls.usable) {
+      // No reselected pass follows: the loosely solved first pass is the result, so finish it.
+      if (pass_number == 2) *result = SolvePass(linear, *pass, result->effects, next, /*start_pass=*/false);
+      break;
+    }
+    RefineResult candidate = SolvePass(linear, candidate_start, result->effects, next, /*start_pass=*/false);
+    candidate.reselected = candidate_start.tls;
+    *result = std::move(candidate);
+    *pass = std::move(candidate_start);
+    held = pass_held;
+    step_done();
+    if (EffectsSettled(*result, previous, options)) break;
+    previous = result->effects;
+  }
+  if (held.empty()) return {};
+  return "the re-selection on the rows corrected by the effects brought back " + held +
+         ", which the linear step discarded, with a sign their physics excludes: held discarded, as in the linear "
+         "step (these flights fix their ratios, not their scale)";
+}
+
+// One rule for the essential parameters of both blocks (EssentialSelectionDrops, noise-aware): a refined
+// essential parameter whose physics excludes 0 (kd, the inertia's diagonal) and whose refined %sigma
+// breaks the selection's rule is discarded as the selection discards it: estimated beside the others
+// (profiled), predicted with, not reported. The refinement estimated it already, and the others'
+// covariance is their marginal one: relabelling moves no value. A first moment or a product of
+// inertia would be held at 0 instead, which changes the model (on jana04 by PWM the cascade dropped
+// ms_x and ms_y and Table III's Mx rose 27 -> 94 %): those stay essential with their refined std, and
+// the check refined_identifiable names them.
+void ApplyEssentialRule(const IdentificationResult& linear, RefineResult* result) {
+  if (!result->has_covariance || linear.options.tls.method != TlsMethod::kNoiseAware) return;
+  TlsSolution& refined = result->refined;
+  const std::vector<std::string>& names = linear.system.parameter_names;
+  if (refined.profiled.size() != refined.essential.size()) return;
+  while (true) {
+    std::vector<int> essential;
+    for (int k = 0; k < linear.system.num_parameters(); ++k)
+      if (refined.essential[k]) essential.push_back(k);
+    Eigen::VectorXd rel(static_cast<Eigen::Index>(essential.size()));
+    for (size_t a = 0; a < essential.size(); ++a) {
+      const int k = essential[a];
+      rel[static_cast<Eigen::Index>(a)] = k != 0 && PositiveByPhysics(names[k]) ? refined.rel_std_pct[k] : -1.0;
+    }
+    const int worst = EssentialSelectionDrops(rel, linear.options.tls);
+    if (worst < 0) break;
+    const int k = essential[static_cast<size_t>(worst)];
+    DiscardedParameter dropped = DiscardedOf(names, essential, refined.chi(essential),
+                                             refined.covariance(essential, essential), worst, rel[worst]);
+    dropped.reason =
+        "its refined %sigma exceeds the limit; estimated beside the others, not held at 0 (its "
+        "physics excludes 0)";
+    refined.discarded.push_back(dropped);
+    refined.essential[k] = false;
+    refined.profiled[k] = true;
+    refined.profiled_chi[k] = refined.chi[k];
+    refined.profiled_std[k] = refined.std[k];
+    refined.chi[k] = 0.0;
+    refined.covariance.row(k).setZero();
+    refined.covariance.col(k).setZero();
+    SetStdFromCovariance(names, &refined);
+    LOG(INFO) << "refined block: " << names[k] << " discarded at " << dropped.rel_std_pct << " % relative std";
+  }
+  SetAllowedRanges(linear.system, ConfigurationMasses(linear.flights), &refined);
+}
+
+// The warnings of a finished refinement: estimates on a bound, pinned spin patterns, estimates relative
+// to an unstated reference, confounded pairs.
+void AddRefineWarnings(const IdentificationResult& linear, const RefineOptions& options, RefineResult* result) {
+  // Estimates on a bound are not estimates.
+  result->on_bound = EffectsOnBound(*result, options);
+  for (EffectKind kind : result->on_bound)
+    result->warnings.push_back(kind->parameter_name() +
+                               " ended on the bound of its physical range: these flights do not determine it "
+                               "(or the residual has a cause outside the modelled effects); do not trust it");
+  // Coordinates of one effect whose pins (its held directions) tie them: their correlation is the pins'.
+  std::vector<std::string> pinned_prefixes;
+  for (EffectKind kind : options.effects)
+    if (HeldDirections(kind, linear.flights.front().vehicle, KdFree(linear.system, result->refined)).cols() > 0) {
+      pinned_prefixes.push_back(kind->parameter_name() + "_");
+      result->warnings.push_back(kind->parameter_name() +
+                                 ": the rotors' spin pattern of its values (sum of spin x value) "
+                                 "is held at 0: kd is not estimated, and without the yaw torque that pattern shows "
+                                 "only as a roll-pitch coupling (X layout: what I_xy does) or as roll against pitch "
+                                 "gain (+ layout: what I_xx / I_yy do)");
+    }
+  // Estimates relative to a known value the vehicle file leaves out (rotor_drag's k_f and the IMU's height).
+  for (EffectKind kind : result->enabled)
+    for (const ProcessedFlight& flight : linear.flights) {
+      const std::string reads = kind->UnstatedReference(result->effects.Get(kind), flight.vehicle);
+      if (!reads.empty()) {
+        result->warnings.push_back(reads);
+        break;
+      }
+    }
+  const auto tied_by_pins = [&](int a, int b) {
+    return std::any_of(pinned_prefixes.begin(), pinned_prefixes.end(), [&](const std::string& prefix) {
+      return result->effect_labels[a].rfind(prefix, 0) == 0 && result->effect_labels[b].rfind(prefix, 0) == 0;
+    });
+  };
+  // Confounded effects: say how much, and what the data fix instead.
+  for (int a = 0; a < result->effect_correlation.rows(); ++a)
+    for (int b = a + 1; b < result->effect_correlation.cols(); ++b)
+      if (std::abs(result->effect_correlation(a, b)) > 0.9 && !tied_by_pins(a, b))
+        result->warnings.push_back(result->effect_labels[a] + " and " + result->effect_labels[b] +
+                                   " are strongly correlated (" + std::to_string(result->effect_correlation(a, b)) +
+                                   "): these flights separate them poorly" + WhatATradingPairFixes(*result, a, b));
+}
+
+}  // namespace
 
 RefineResult Refine(const IdentificationResult& linear, const RefineOptions& options, const StepProgress& progress) {
   if (const std::string problem = options.Validate(); !problem.empty()) throw Error(problem);
@@ -886,10 +1107,9 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
       if (const std::string why = kind->Unavailable(flight.inputs()); !why.empty())
         throw Error(flight.source + ": " + why);
   Effects start = options.initial;
-  const double linear_criterion = EffectCriterion(linear, Effects{});
   const int total_steps = RefineSteps(options);
   int steps_done = 0;
-  auto step_done = [&]() {
+  const std::function<void()> step_done = [&]() {
     if (progress) progress(++steps_done, total_steps);
   };
   if (SearchesDelayGrid(options)) {
@@ -898,108 +1118,22 @@ RefineResult Refine(const IdentificationResult& linear, const RefineOptions& opt
     step_done();
   }
   const bool reselects = options.reselect_essential && !options.effects.empty();
-  RefineResult result = SolveEffects(linear.flights, linear.system,
-                                     AnchorFlights(linear.flights, Effects{}, linear.system, linear.solution, options),
-                                     linear.solution, start, options,
-                                     /*start_pass=*/reselects);
+  PassStart pass{linear.solution, Effects{}};
+  RefineResult result = SolvePass(linear, pass, start, options, /*start_pass=*/reselects);
   step_done();
-  if (reselects) {
-    // The TLS weights and equation-error variances of the linear step were fitted to the residual of
-    // the uncorrected rows (a delay inflates the yaw equation's error, say), and its essential set
-    // to their precision. Re-run the TLS, weights and selection included, on the rows corrected by
-    // the estimated effects, and refine again from there, until the effects settle.
-    Effects previous = result.effects;
-    std::string held;  // of the pass whose result stands
-    for (int pass = 2; pass <= kMaxRefinePasses; ++pass) {
-      IdimSystem corrected{linear.system, SystemRowsWithEffects(linear, result.effects)};
-      std::string pass_held;
-      TlsSolution reselected = ReselectEssential(corrected, linear, &pass_held);
-      corrected.w = Eigen::MatrixXd();  // the pass needs its layout only; the rows are 100 MB on a 1 h log
-      if (!reselected.usable) {
-        // No reselected pass follows: the loosely solved first pass is the result, so finish it.
-        if (pass == 2) {
-          RefineOptions finish = options;
-          finish.coarse_delay_search = false;
-          result = SolveEffects(linear.flights, linear.system,
-                                AnchorFlights(linear.flights, Effects{}, linear.system, linear.solution, options),
-                                linear.solution, result.effects, finish, /*start_pass=*/false);
-        }
-        break;
-      }
-      std::vector<internal::RotorMomentAnchor> anchors =
-          AnchorFlights(linear.flights, result.effects, corrected, reselected, options);
-      RefineOptions next = options;
-      next.coarse_delay_search = false;
-      RefineResult candidate =
-          SolveEffects(linear.flights, corrected, std::move(anchors), reselected, result.effects, next,
-                       /*start_pass=*/false);
-      candidate.reselected = reselected;
-      result = std::move(candidate);
-      held = pass_held;
-      step_done();
-      // Settled when no effect coordinate moved by more than a tenth of its std (without a
-      // covariance: by more than the effect's settle tolerance).
-      bool settled = true;
-      for (EffectKind kind : options.effects) {
-        const Eigen::VectorXd change = (result.effects.Get(kind) - previous.Get(kind)).cwiseAbs();
-        const Eigen::VectorXd std_dev = result.effects_std.Get(kind);
-        for (Eigen::Index k = 0; k < change.size(); ++k) {
-          const double tolerance =
-              k < std_dev.size() && std_dev[k] > 0.0 ? 0.1 * std_dev[k] : kind->info().settle_tolerance;
-          settled = settled && change[k] <= tolerance + 1e-12;
-        }
-      }
-      if (settled) break;
-      previous = result.effects;
-    }
-    if (!held.empty())
-      result.warnings.push_back("the re-selection on the rows corrected by the effects brought back " + held +
-                                ", which the linear step discarded, with a sign their physics excludes: held "
-                                "discarded, as in the linear step (these flights fix their ratios, not their scale)");
-  }
+  const std::string held = reselects ? RefineReselected(linear, options, step_done, &result, &pass) : "";
   if (progress && steps_done < total_steps) progress(total_steps, total_steps);
-  // Estimates on a bound are not estimates.
-  result.on_bound = EffectsOnBound(result, options);
-  for (EffectKind kind : result.on_bound)
-    result.warnings.push_back(kind->parameter_name() +
-                              " ended on the bound of its physical range: these flights do not determine it "
-                              "(or the residual has a cause outside the modelled effects); do not trust it");
-  // Coordinates of one effect whose pins (its held directions) tie them: their correlation is the pins'.
-  std::vector<std::string> pinned_prefixes;
-  for (EffectKind kind : options.effects)
-    if (HeldDirections(kind, linear.flights.front().vehicle, KdFree(linear.system, result.refined)).cols() > 0) {
-      pinned_prefixes.push_back(kind->parameter_name() + "_");
-      result.warnings.push_back(kind->parameter_name() +
-                                ": the rotors' spin pattern of its values (sum of spin x value) "
-                                "is held at 0: kd is not estimated, and without the yaw torque that pattern shows "
-                                "only as a roll-pitch coupling (X layout: what I_xy does) or as roll against pitch "
-                                "gain (+ layout: what I_xx / I_yy do)");
-    }
-  // Estimates relative to a known value the vehicle file leaves out (rotor_drag's k_f and the IMU's height).
-  for (EffectKind kind : result.enabled)
-    for (const ProcessedFlight& flight : linear.flights) {
-      const std::string reads = kind->UnstatedReference(result.effects.Get(kind), flight.vehicle);
-      if (!reads.empty()) {
-        result.warnings.push_back(reads);
-        break;
-      }
-    }
-  const auto tied_by_pins = [&](int a, int b) {
-    return std::any_of(pinned_prefixes.begin(), pinned_prefixes.end(), [&](const std::string& prefix) {
-      return result.effect_labels[a].rfind(prefix, 0) == 0 && result.effect_labels[b].rfind(prefix, 0) == 0;
-    });
-  };
-  result.linear_criterion = linear_criterion;
+  // With no effect the refinement is the TLS, whose selection stands (the refined covariance, from the
+  // Jacobian of the whitened rows, differs from the TLS's by some % of itself: a product of inertia the
+  // TLS kept under 10 % read 11.3 % on a 30 s flight).
+  if (!options.effects.empty()) ApplyEssentialRule(linear, &result);
+  if (!held.empty()) result.warnings.push_back(held);
+  NoteBodyConstraint(&result);
+  AddRefineWarnings(linear, options, &result);
+  result.linear_criterion = EffectCriterion(linear, Effects{});
   result.refined_criterion = EffectCriterion(linear, result.effects);
   result.relative_error_pct = RelativeErrorWithEffects(
       linear.flights, NamedParameters(linear.system, PredictionChi(result.refined)), result.effects);
-  // Confounded effects: say how much, and what the data fix instead.
-  for (int a = 0; a < result.effect_correlation.rows(); ++a)
-    for (int b = a + 1; b < result.effect_correlation.cols(); ++b)
-      if (std::abs(result.effect_correlation(a, b)) > 0.9 && !tied_by_pins(a, b))
-        result.warnings.push_back(result.effect_labels[a] + " and " + result.effect_labels[b] +
-                                  " are strongly correlated (" + std::to_string(result.effect_correlation(a, b)) +
-                                  "): these flights separate them poorly" + WhatATradingPairFixes(result, a, b));
   return result;
 }
 

@@ -54,8 +54,10 @@ std::vector<Check> RefinedParameterChecks(const IdentificationResult& linear, co
                           "), so no std is reported; refine fewer effects (rotorid ablate compares subsets)"});
   }
   // The refined block's essential parameters come from the re-selection on corrected rows; its own
-  // covariance can then put one above the %sigma limit the selection applies (NanoBench B3+B5+B10 with
-  // rotor drag and motor lag: I_xx and I_yy at 31 and 32 % for a 10 % limit). Said, not hidden.
+  // covariance can then put one above the %sigma limit the selection applies. Refine discards kd and
+  // the diagonal inertia by that rule (NanoBench B3+B5+B10 with rotor drag and motor lag: I_xx and I_yy
+  // at 31 and 32 %); a first moment or product of inertia would be held at 0, which changes the model,
+  // so it stays essential: said, not hidden.
   std::string above_limit;
   const double limit = linear.options.tls.max_rel_std_pct;
   if (refined.has_covariance && refined.refined.method == TlsMethod::kNoiseAware)

@@ -76,6 +76,20 @@ nlohmann::json SolverJson(const SolverReport& solver) {
           {"seconds", JsonNumber(solver.seconds)}};
 }
 
+namespace {
+
+nlohmann::json BodyConstraintJson(const BodyConstraint& c) {
+  return {{"parameterisation", c.charted.empty() ? "none" : "log-Cholesky of the pseudo-inertia, mass held"},
+          {"charted", c.charted},
+          {"notes", c.notes},
+          {"start_moved", c.start_moved},
+          {"start_distance_std", JsonNumber(c.start_distance_std)},
+          {"unconstrained_distance_std", JsonNumber(c.unconstrained_distance_std)},
+          {"largest_move", c.largest_move}};
+}
+
+}  // namespace
+
 nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResult& refined) {
   nlohmann::json correlation = nlohmann::json::array();
   for (Eigen::Index a = 0; a < refined.effect_correlation.rows(); ++a) {
@@ -92,6 +106,7 @@ nlohmann::json RefinedJson(const IdentificationResult& linear, const RefineResul
           {"criterion",
            {{"linear", JsonNumber(refined.linear_criterion)}, {"refined", JsonNumber(refined.refined_criterion)}}},
           {"autocorrelation_factor", JsonNumber(refined.autocorrelation_factor)},
+          {"body_constraint", BodyConstraintJson(refined.body_constraint)},
           {"solver", SolverJson(refined.solver)},
           {"warnings", refined.warnings}};
 }

@@ -195,5 +195,72 @@ TEST(AllowedDiagonalInertiaTest, IsTheTriangleInequalityForACentredBody) {
   EXPECT_TRUE(AllowedDiagonalInertia(1.285, below, 2).empty());
 }
 
+// The refinement's chart: with ms_x, ms_y and I_xy held (at 0 and at a given product), every coordinate
+// vector is a body with those values, and a body with them round-trips.
+TEST(ConsistentBodyChartTest, HoldsItsParametersAndRoundTrips) {
+  std::array<bool, kNumBodyParameters> held{};
+  held[0] = held[1] = held[6] = true;
+  ConsistentBodyChart::Vector9 value = ConsistentBodyChart::Vector9::Zero();
+  value[6] = -2e-4;
+  const ConsistentBodyChart chart(0.7, held, value);
+  ASSERT_EQ(chart.dimension(), 6);
+  const double coordinates[6] = {-1.5, -1.7, -3.0, 0.03, -0.02, 0.011};
+  ConsistentBodyChart::Vector9 chi;
+  chart.Body(coordinates, chi.data());
+  EXPECT_EQ(chi[0], 0.0);
+  EXPECT_EQ(chi[1], 0.0);
+  EXPECT_EQ(chi[6], -2e-4);
+  EXPECT_TRUE(CheckPhysicalConsistency(0.7, BodyParameters::FromVector(chi)).consistent);
+  Eigen::VectorXd back;
+  ASSERT_TRUE(chart.Coordinates(chi, &back));
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(back[k], coordinates[k], 1e-12) << k;
+  // The Jacobian of the held solve (s12 from I_xy) against central differences.
+  using Jet = ceres::Jet<double, 6>;
+  Jet point[6], chi_jet[kNumBodyParameters];
+  for (int k = 0; k < 6; ++k) point[k] = Jet(coordinates[k], k);
+  chart.Body(point, chi_jet);
+  const double h = 1e-6;
+  for (int k = 0; k < 6; ++k) {
+    double plus[6], minus[6];
+    std::copy(coordinates, coordinates + 6, plus);
+    std::copy(coordinates, coordinates + 6, minus);
+    plus[k] += h;
+    minus[k] -= h;
+    ConsistentBodyChart::Vector9 chi_plus, chi_minus;
+    chart.Body(plus, chi_plus.data());
+    chart.Body(minus, chi_minus.data());
+    for (int i = 0; i < kNumBodyParameters; ++i)
+      EXPECT_NEAR(chi_jet[i].v[k], (chi_plus[i] - chi_minus[i]) / (2.0 * h), 1e-9) << i << " " << k;
+  }
+  // No chart holds a diagonal inertia; an impossible body has no coordinates.
+  std::array<bool, kNumBodyParameters> diagonal{};
+  diagonal[5] = true;
+  EXPECT_THROW(ConsistentBodyChart(0.7, diagonal, value), Error);
+  BodyParameters impossible;
+  impossible.inertia = Eigen::Vector3d(0.015, 0.0172, 1.9e-4).asDiagonal();
+  EXPECT_FALSE(chart.Coordinates(impossible.ToVector(), &back));
+}
+
+// The projection holding parameters (a refinement's start) keeps them and is a body.
+TEST(ConsistentProjectionTest, KeepsTheHeldParameters) {
+  BodyParameters estimate;
+  estimate.first_moment = Eigen::Vector3d(0.0, 0.0, -9.5e-4);
+  estimate.inertia = Eigen::Vector3d(3.4e-6, 4.0e-6, 2.9e-5).asDiagonal();
+  Eigen::Matrix<double, kNumBodyParameters, 1> std_dev;
+  std_dev << 0.0, 0.0, 4e-5, 7e-7, 6e-7, 3e-6, 0.0, 0.0, 0.0;
+  Eigen::MatrixXd sqrt_information = Eigen::MatrixXd::Zero(kNumBodyParameters, kNumBodyParameters);
+  for (int k = 0; k < kNumBodyParameters; ++k)
+    if (std_dev[k] > 0.0) sqrt_information(k, k) = 1.0 / std_dev[k];
+  std::array<bool, kNumBodyParameters> held{};
+  held[0] = held[1] = held[6] = held[7] = held[8] = true;
+  const ConsistentProjection projection =
+      ProjectOntoConsistentBodies(0.04085, estimate, sqrt_information, std_dev, nullptr, held);
+  const Eigen::Matrix<double, kNumBodyParameters, 1> chi = projection.body.ToVector();
+  for (int k : {0, 1, 6, 7, 8}) EXPECT_EQ(chi[k], 0.0) << k;
+  Eigen::VectorXd coordinates;
+  EXPECT_TRUE(ConsistentBodyChart(0.04085, held, chi).Coordinates(chi, &coordinates)) << chi.transpose();
+  EXPECT_GT(projection.distance_std, 3.0);
+}
+
 }  // namespace
 }  // namespace rotorid

@@ -146,6 +146,19 @@ struct TlsSolution {
 
 TlsSolution SolveIdim(const IdimSystem& system, const TlsOptions& options);
 
+// The essential-parameter selection's rule (TlsOptions: the paper's r_sigma ratio, or the noise-aware
+// %sigma limit), one for the TLS and the refinement: the index of the parameter to drop from
+// `rel_std_pct` (each estimated parameter's %sigma; negative: not a candidate), or -1 to keep them all.
+int EssentialSelectionDrops(const Eigen::VectorXd& rel_std_pct, const TlsOptions& options);
+// The record of dropping `columns[dropped]` from an estimate `chi` with `covariance` (both over
+// `columns`): its value, std and %sigma, and the parameter it is most correlated with.
+DiscardedParameter DiscardedOf(const std::vector<std::string>& names, const std::vector<int>& columns,
+                               const Eigen::VectorXd& chi, const Eigen::MatrixXd& covariance, int dropped,
+                               double rel_std_pct);
+// std and rel_std_pct from the solution's chi and covariance; a discarded parameter keeps the %sigma
+// at which it was dropped.
+void SetStdFromCovariance(const std::vector<std::string>& names, TlsSolution* solution);
+
 // The parameters a model predicts with: chi, and the profiled parameters' estimates in place of their
 // zeros where PredictsWithProfiled (a discarded inertia is estimated beside the others, and its gyroscopic terms act in Mx and My:
 // held at 0 in the prediction, jana06's Table III read Mx 29.1 % for 21.9 %), except the rotor

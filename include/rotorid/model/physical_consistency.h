@@ -13,8 +13,10 @@
 // squared RMS extents of the mass along the principal axes, so a violation reads in millimetres.
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "rotorid/model/parameters.h"
 
@@ -104,6 +106,59 @@ void BodyFromLogCholesky(const T* theta, T* chi, T* mass) {
 // problem (CheckPhysicalConsistency) when the body is not consistent.
 Eigen::Matrix<double, kNumLogCholesky, 1> LogCholeskyOf(double mass_kg, const BodyParameters& body);
 
+// The consistent bodies of a known mass with some of the nine body parameters held at given values (a
+// refinement holds the parameters the essential selection discarded at 0): a smooth chart by theta's
+// entries with alpha held at the mass, where a held first moment fixes its t_i (ms = m t) and a held
+// product of inertia fixes its s_ij (J's off-diagonal entries are m (U U^T)_ij, linear in s_ij given the
+// rest: s23 and s13 first, then s12). Every coordinate vector is a body with the held values, every
+// such body has one coordinate vector. The diagonal inertia cannot be held (no body has 0 there).
+// Coordinates: theta's d1 d2 d3 s12 s23 s13 t1 t2 t3 that are not fixed by a held parameter, in that order.
+class ConsistentBodyChart {
+ public:
+  using Vector9 = Eigen::Matrix<double, kNumBodyParameters, 1>;
+  // held[k]: body parameter k (BodyParameters::ToVector's order) held at held_value[k]. Throws
+  // rotorid::Error for a held diagonal inertia or a mass that is not positive.
+  ConsistentBodyChart(double mass_kg, const std::array<bool, kNumBodyParameters>& held, const Vector9& held_value);
+
+  int dimension() const { return static_cast<int>(free_theta_.size()); }
+  double mass() const { return mass_; }
+
+  // The body (ToVector's order) at `coordinates` (dimension() of them).
+  template <typename T>
+  void Body(const T* coordinates, T* chi) const;
+  // The coordinates of a consistent body; false when it is none (J not positive definite). A body off
+  // the held values maps to the one with its free coordinates and the held values.
+  bool Coordinates(const Vector9& chi, Eigen::VectorXd* coordinates) const;
+
+ private:
+  double mass_, alpha_;
+  std::array<bool, kNumBodyParameters> held_;
+  Vector9 held_value_;
+  std::vector<int> free_theta_;  // theta's entries (1..9) that are coordinates
+};
+
+template <typename T>
+void ConsistentBodyChart::Body(const T* coordinates, T* chi) const {
+  using std::exp;
+  T theta[kNumLogCholesky];
+  for (T& t : theta) t = T(0.0);
+  theta[0] = T(alpha_);
+  for (size_t k = 0; k < free_theta_.size(); ++k) theta[free_theta_[k]] = coordinates[k];
+  // theta = [alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3]; ms_i = m t_i; J_ij = -I_ij = m (U U^T)_ij / e^2alpha.
+  for (int i = 0; i < 3; ++i)
+    if (held_[i]) theta[7 + i] = T(held_value_[i] / mass_);
+  const T& t1 = theta[7];
+  const T& t2 = theta[8];
+  const T& t3 = theta[9];
+  if (held_[8]) theta[5] = (T(-held_value_[8] / mass_) - t2 * t3) / exp(theta[3]);                        // I_yz: s23
+  if (held_[7]) theta[6] = (T(-held_value_[7] / mass_) - t1 * t3) / exp(theta[3]);                        // I_xz: s13
+  if (held_[6]) theta[4] = (T(-held_value_[6] / mass_) - theta[6] * theta[5] - t1 * t2) / exp(theta[2]);  // I_xy
+  T mass;
+  BodyFromLogCholesky(theta, chi, &mass);
+  for (int k = 0; k < kNumBodyParameters; ++k)
+    if (held_[k]) chi[k] = T(held_value_[k]);  // exact, not up to round-off
+}
+
 // The consistent body nearest to an estimate in the estimate's own metric: minimises
 // (chi - chi0)^T Cov^-1 (chi - chi0) over the nine body parameters with the mass held, through the
 // log-Cholesky parameterisation (Ceres). `sqrt_information` is a factor L^T of Cov^-1 (rows: residuals,
@@ -118,10 +173,12 @@ struct ConsistentProjection {
   bool converged = true;
 };
 // `start`: a consistent body to start from (the one the model predicts with), else the estimate with
-// its negative second moments raised.
+// its negative second moments raised. `held`: parameters that keep the estimate's values (a refinement's
+// discarded ones, held at 0; ConsistentBodyChart); not the diagonal inertia.
 ConsistentProjection ProjectOntoConsistentBodies(double mass_kg, const BodyParameters& estimate,
                                                  const Eigen::MatrixXd& sqrt_information,
                                                  const Eigen::Matrix<double, kNumBodyParameters, 1>& std_dev,
-                                                 const BodyParameters* start = nullptr);
+                                                 const BodyParameters* start = nullptr,
+                                                 const std::array<bool, kNumBodyParameters>& held = {});
 
 }  // namespace rotorid

@@ -59,6 +59,10 @@ struct RefineOptions {
   // had made unidentifiable (a delay spoils the yaw equation, say) come back. Off: the linear
   // step's discarded parameters stay fixed at zero.
   bool reselect_essential = true;
+  // Physically consistent bodies by construction (MODEL.md 10): each configuration's first moment and
+  // inertia move on the log-Cholesky chart of its pseudo-inertia with the known mass held, started from
+  // the TLS estimate's nearest body in its metric. Off: the unconstrained refinement.
+  bool consistent_bodies = true;
 
   std::string Validate() const;
   bool Enabled(EffectKind kind) const;
@@ -72,6 +76,21 @@ struct SolverReport {
   std::string message;
   double seconds = 0.0;
   std::string full_report;  // Ceres' FullReport()
+};
+
+// How the refinement kept its bodies physical (RefineOptions::consistent_bodies).
+struct BodyConstraint {
+  std::vector<std::string> charted;  // the bodies on a log-Cholesky chart ("A")
+  std::vector<std::string> notes;    // what is not, and why
+  // The TLS estimate that started the final pass, where it was no body: its distance (std of that
+  // estimate) to the body the pass started from, per body ("A 12.3 std"); the largest of them.
+  std::vector<std::string> start_moved;
+  double start_distance_std = 0.0;
+  // The unconstrained optimum's distance from the refined (consistent) estimate, in the refined std:
+  // one Gauss-Newton step from it with the chart lifted (0 where no body bounds the estimate; 0 without
+  // a covariance); the parameter that moves most, in its std ("A.ms_z 2.1 std").
+  double unconstrained_distance_std = 0.0;
+  std::string largest_move;
 };
 
 struct RefineResult {
@@ -103,6 +122,7 @@ struct RefineResult {
   // Effect coordinates that a parameter held at 0 by the essential selection would explain almost
   // entirely ("imu_position_m_z ~ B.ms_z"): their value assumes that parameter is 0.
   std::vector<std::string> resting_on_discarded;
+  BodyConstraint body_constraint;
   std::vector<std::string> warnings;
 };
 
