@@ -1,8 +1,22 @@
-// The usage-error messages (docs/cli.md): which help to read, and an unknown subcommand named.
+// The usage-error messages (docs/cli.md): which help to read, an unknown subcommand named, a value out of
+// its range.
 
 #include "commands.h"
+#include "rotorid/core/text.h"
 
 namespace rotorid::cli {
+
+CLI::Validator Within(double low, double high) {
+  return CLI::Validator(
+      [low, high](const std::string& text) -> std::string {
+        double value = 0.0;
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        if (!(value >= low && value <= high))  // NaN fails too
+          return "must lie in [" + ShortNumber(low) + ", " + ShortNumber(high) + "], got " + text;
+        return {};
+      },
+      "in [" + ShortNumber(low) + ", " + ShortNumber(high) + "]");
+}
 
 std::string UsageHint(const CLI::App& root, int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
