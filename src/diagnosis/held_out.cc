@@ -189,25 +189,16 @@ EffectTest TestAddedEffects(const HeldOutGap& without, const HeldOutGap& with, i
   return test;
 }
 
-PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const HeldOutScales& scales) {
-  if (a.segments.size() != b.segments.size()) throw Error("held-out comparison of different row sets");
-  const Eigen::MatrixXd weights_a = ResidualWeights(a, scales), weights_b = ResidualWeights(b, scales);
-  std::vector<Eigen::VectorXd> differences;
+namespace {
+
+// The one-sided paired test of per-row differences (series per segment): their mean, and its t
+// statistic with the Bartlett long-run variance of the autocorrelated rows.
+PairedComparison PairedTest(std::vector<Eigen::VectorXd> differences) {
   double sum = 0.0;
   Eigen::Index n = 0;
-  for (size_t s = 0; s < a.segments.size(); ++s) {
-    const Eigen::MatrixXd& ra = a.segments[s].residual;
-    const Eigen::MatrixXd& rb = b.segments[s].residual;
-    if (ra.rows() != rb.rows()) throw Error("held-out comparison of different row sets");
-    Eigen::RowVectorXd weight_a = weights_a.row(a.flight[s]), weight_b = weights_b.row(a.flight[s]);
-    for (int j = 0; j < kComponents; ++j)
-      if (!a.scored[s][j]) weight_a[j] = weight_b[j] = 0.0;
-    Eigen::VectorXd d(ra.rows());
-    for (Eigen::Index r = 0; r < ra.rows(); ++r)
-      d[r] = rb.row(r).cwiseProduct(weight_b).squaredNorm() - ra.row(r).cwiseProduct(weight_a).squaredNorm();
+  for (const Eigen::VectorXd& d : differences) {
     sum += d.sum();
     n += d.size();
-    differences.push_back(std::move(d));
   }
   PairedComparison out;
   if (n < 2) return out;
@@ -221,6 +212,27 @@ PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual&
   out.t_statistic = out.mean_difference / std::sqrt(long_run / static_cast<double>(n));
   out.p_value = 0.5 * std::erfc(out.t_statistic / std::sqrt(2.0));
   return out;
+}
+
+}  // namespace
+
+PairedComparison CompareHeldOut(const HeldOutResidual& a, const HeldOutResidual& b, const HeldOutScales& scales) {
+  if (a.segments.size() != b.segments.size()) throw Error("held-out comparison of different row sets");
+  const Eigen::MatrixXd weights_a = ResidualWeights(a, scales), weights_b = ResidualWeights(b, scales);
+  std::vector<Eigen::VectorXd> differences;
+  for (size_t s = 0; s < a.segments.size(); ++s) {
+    const Eigen::MatrixXd& ra = a.segments[s].residual;
+    const Eigen::MatrixXd& rb = b.segments[s].residual;
+    if (ra.rows() != rb.rows()) throw Error("held-out comparison of different row sets");
+    Eigen::RowVectorXd weight_a = weights_a.row(a.flight[s]), weight_b = weights_b.row(a.flight[s]);
+    for (int j = 0; j < kComponents; ++j)
+      if (!a.scored[s][j]) weight_a[j] = weight_b[j] = 0.0;
+    Eigen::VectorXd d(ra.rows());
+    for (Eigen::Index r = 0; r < ra.rows(); ++r)
+      d[r] = rb.row(r).cwiseProduct(weight_b).squaredNorm() - ra.row(r).cwiseProduct(weight_a).squaredNorm();
+    differences.push_back(std::move(d));
+  }
+  return PairedTest(std::move(differences));
 }
 
 namespace {
@@ -243,7 +255,7 @@ std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& withou
   std::vector<ComponentWorsening> worse;
   for (int j = 0; j < kComponents; ++j) {
     std::vector<Eigen::VectorXd> growth;
-    double before_sq = 0.0, after_sq = 0.0, weighted_before = 0.0, weighted_after = 0.0, sum = 0.0;
+    double before_sq = 0.0, after_sq = 0.0, weighted_before = 0.0, weighted_after = 0.0;
     Eigen::Index n = 0;
     for (size_t s = 0; s < with.segments.size(); ++s) {
       if (!with.scored[s][j] || !without.scored[s][j]) continue;
@@ -256,7 +268,6 @@ std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& withou
       const Eigen::VectorXd d = std::pow(weights_b(f, j), 2) * b - std::pow(weights_a(f, j), 2) * a;
       weighted_before += std::pow(weights_a(f, j), 2) * a.sum();
       weighted_after += std::pow(weights_b(f, j), 2) * b.sum();
-      sum += d.sum();
       n += a.size();
       growth.push_back(d);
     }
@@ -272,17 +283,9 @@ std::vector<ComponentWorsening> WorsenedComponents(const HeldOutResidual& withou
     if (!ModelErrorGrows(before_sq, after_sq, noise_share[j] * before_sq, min_growth_pct) ||
         !ModelErrorGrows(weighted_before, weighted_after, noise_share[j] * weighted_before, min_growth_pct))
       continue;
-    const double mean = sum / static_cast<double>(n);
-    double variance = 0.0;
-    for (Eigen::VectorXd& d : growth) {
-      d.array() -= mean;
-      variance += d.squaredNorm();
-    }
-    variance /= static_cast<double>(n);
-    const double long_run = variance * AutocorrelationFactor(growth);
-    if (!(long_run > 0.0)) continue;
-    w.t_statistic = mean / std::sqrt(long_run / static_cast<double>(n));
-    if (0.5 * std::erfc(w.t_statistic / std::sqrt(2.0)) < alpha) worse.push_back(w);
+    const PairedComparison test = PairedTest(std::move(growth));
+    w.t_statistic = test.t_statistic;
+    if (test.p_value < alpha) worse.push_back(w);
   }
   return worse;
 }
