@@ -191,11 +191,13 @@ PredictResult RunPredict(const PredictOptions& options) {
     const internal::ErrorSums sums =
         internal::ScoreSegments(selected.segments, vehicle, model, observation, options, &flight.states);
     flight.curves = sums.Mean();
+    flight.torque_bands = sums.torque.Mean();
     pooled.Add(sums);
     result.flights.push_back(std::move(flight));
     result.inputs.push_back(std::move(selected.summary));
   }
   result.pooled = pooled.Mean();
+  result.torque_bands = pooled.torque.Mean();
   if (result.pooled.windows == 0)
     throw Error("no window of " + std::to_string(options.horizon_steps) + " steps of " + ShortNumber(options.dt_s) +
                 " s lies in the " + PredictionScopeName(options.scope) +

@@ -82,6 +82,23 @@ std::string SummaryTable(const PredictionCurves& curves, const std::vector<int>&
   return html + "</tbody></table>\n";
 }
 
+// The model's angular acceleration at the logged states against the body's, one row per band.
+std::string TorqueBandTable(const std::vector<TorqueBand>& bands) {
+  if (bands.empty()) return "";
+  const auto pair = [](const Eigen::Vector3d& v) { return General(v[0]) + " / " + General(v[1]); };
+  std::string html =
+      "<table><thead><tr><th>band</th><th class=\"num\">body (rad/s<sup>2</sup> RMS, roll / pitch)</th>"
+      "<th class=\"num\">model</th><th class=\"num\">error</th><th class=\"num\">gain</th>"
+      "<th class=\"num\">error as a centre-of-mass shift (mm)</th></tr></thead><tbody>\n";
+  for (const TorqueBand& b : bands)
+    html += "<tr><td>" + Html(TorqueBandName(b)) + "</td><td class=\"num\">" + pair(b.body_rms_radps2) +
+            "</td><td class=\"num\">" + pair(b.model_rms_radps2) + "</td><td class=\"num\">" +
+            pair(b.error_rms_radps2) + "</td><td class=\"num\">" + TorqueBandGainText(b) + "</td><td class=\"num\">" +
+            pair(b.centre_of_mass_equivalent_mm) +
+            "</td></tr>\n";
+  return html + "</tbody></table>\n";
+}
+
 }  // namespace
 
 std::string PredictHtml(const PredictResult& result) {
@@ -91,7 +108,8 @@ std::string PredictHtml(const PredictResult& result) {
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>rotorid predict</title>\n"
       "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
       "td,th{border:1px solid #ccc;padding:3px 8px}.num{text-align:right}.bad{color:#a00}</style>\n</head>\n"
-      "<body>\n<h1>rotorid predict</h1>\n<p>The " +
+      "<body>\n<h1>rotorid predict</h1>\n<p><b>" +
+      Html(PredictAnswer(result)) + "</b></p>\n<p>The " +
       Html(result.block) + " model of <code>" + Html(o.params_path) + "</code> flown open loop over " +
       std::to_string(o.horizon_steps) + " steps of " + General(o.dt_s) + " s from " +
       std::to_string(result.pooled.windows) + " logged states (" + PredictionScopeName(o.scope) +
@@ -108,9 +126,18 @@ std::string PredictHtml(const PredictResult& result) {
     if (!result.pooled.mae[g].empty())
       html += Panel(kPredictionGroupNames[g], kUnits[g], result.pooled.mae[g], result.pooled.naive_mae[g], o.dt_s);
   html += "</div>\n<p>Solid blue: the model; dashed grey: naive. MAE against the time ahead, logarithmic.</p>\n";
+  if (!result.torque_bands.empty())
+    html +=
+        "<h2>The model's torque against the body's, by frequency</h2>\n<p>The model's angular acceleration at every "
+        "logged state with the logged rotor signal beside the body's (the gyro differentiated), split into bands. "
+        "Gain: the body's per unit of the model's (1: the body follows the model's torque; near 0: it does not). A "
+        "window integrates the error of the low bands: a constant error is what a torque bias observer takes out, "
+        "what varies below 1 Hz grows the angular velocity error about linearly over a horizon of 0.5 s. The last "
+        "column is the error as the shift of the centre of mass whose weight would exert it.</p>\n" +
+        TorqueBandTable(result.torque_bands);
   for (const FlightPrediction& f : result.flights)
     html += "<h2>" + Html(f.file) + "</h2>\n<p>" + std::to_string(f.curves.windows) + " windows; " + Html(f.states) +
-            "</p>\n" + SummaryTable(f.curves, steps);
+            "</p>\n" + SummaryTable(f.curves, steps) + TorqueBandTable(f.torque_bands);
   for (const Check& c : result.checks)
     html += "<p>check " + Html(c.name) + " (" + CheckStatusName(c.status) + "): " + Html(c.message) + "</p>\n";
   return html + "</body>\n</html>\n";

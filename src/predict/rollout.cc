@@ -150,6 +150,7 @@ void ErrorSums::Add(const ErrorSums& other) {
     }
     windows[g] += other.windows[g];
   }
+  torque.Add(other.torque);
 }
 
 PredictionCurves ErrorSums::Mean() const {
@@ -212,19 +213,12 @@ void AddWindow(const LoggedStates& states, const MultirotorDynamics& dynamics,
 // (trapezoid). Over a window's past, r grows with the slope of the missing angular acceleration.
 class TorqueBiasObserver {
  public:
-  TorqueBiasObserver(const LoggedStates& states, const MultirotorDynamics& dynamics,
-                     const MultirotorDynamics::RotorCommand& command)
-      : residual_(states.size(), 3), parameters_(dynamics.parameters()) {
-    Eigen::Vector3d previous = Eigen::Vector3d::Zero(), integral = Eigen::Vector3d::Zero();
+  TorqueBiasObserver(const LoggedStates& states, const Eigen::MatrixX3d& model_acceleration,
+                     const VehicleParameters& parameters)
+      : residual_(states.size(), 3), parameters_(parameters) {
+    Eigen::Vector3d integral = Eigen::Vector3d::Zero();
     for (int k = 0; k < states.size(); ++k) {
-      const SimState state = LoggedState(states, k);
-      const double t = states.t_s[k];
-      const Eigen::Vector3d acc = dynamics
-                                      .Accelerations(t, state, dynamics.ActingRotorSpeeds(t, state, command),
-                                                     dynamics.ActingRotorRates(t, state, command))
-                                      .angular_acceleration_b_radps2;
-      if (k > 0) integral += 0.5 * (previous + acc) * states.dt_s;
-      previous = acc;
+      if (k > 0) integral += 0.5 * (model_acceleration.row(k - 1) + model_acceleration.row(k)).transpose() * states.dt_s;
       residual_.row(k) = states.angular_velocity_b_radps.row(k) - integral.transpose();
     }
   }
@@ -250,6 +244,20 @@ class TorqueBiasObserver {
 };
 
 }  // namespace
+
+Eigen::MatrixX3d ModelAngularAccelerations(const LoggedStates& states, const MultirotorDynamics& dynamics,
+                                           const MultirotorDynamics::RotorCommand& command) {
+  Eigen::MatrixX3d acceleration(states.size(), 3);
+  for (int k = 0; k < states.size(); ++k) {
+    const SimState state = LoggedState(states, k);
+    const double t = states.t_s[k];
+    acceleration.row(k) = dynamics
+                              .Accelerations(t, state, dynamics.ActingRotorSpeeds(t, state, command),
+                                             dynamics.ActingRotorRates(t, state, command))
+                              .angular_acceleration_b_radps2.transpose();
+  }
+  return acceleration;
+}
 
 ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const FlownModel& model,
                       const PredictOptions& options) {
@@ -288,8 +296,10 @@ ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const 
       options.threads > 0 ? options.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int chunks = std::min<int>(static_cast<int>(starts.size()), 8 * threads);
   std::vector<ErrorSums> partial(std::max(chunks, 0), ErrorSums(horizon, states.has_pose));
+  const Eigen::MatrixX3d model_acceleration = ModelAngularAccelerations(states, dynamics, command);
   const std::optional<TorqueBiasObserver> observer =
-      past > 0 ? std::optional<TorqueBiasObserver>(std::in_place, states, dynamics, command) : std::nullopt;
+      past > 0 ? std::optional<TorqueBiasObserver>(std::in_place, states, model_acceleration, model.parameters)
+               : std::nullopt;
   ParallelFor(chunks, threads, [&](int c) {
     for (size_t s = static_cast<size_t>(c); s < starts.size(); s += static_cast<size_t>(chunks)) {
       if (!observer) {
@@ -305,6 +315,7 @@ ErrorSums ScoreFlight(const LoggedStates& states, const Vehicle& vehicle, const 
   });
   ErrorSums total(horizon, states.has_pose);
   for (const ErrorSums& p : partial) total.Add(p);
+  total.torque = CompareTorque(states, model.parameters, model_acceleration);
   return total;
 }
 

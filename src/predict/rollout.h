@@ -14,6 +14,7 @@
 #include "rotorid/model/effects.h"
 #include "rotorid/model/parameters.h"
 #include "rotorid/predict/predict.h"
+#include "rotorid/sim/dynamics.h"
 
 namespace rotorid::internal {
 
@@ -57,15 +58,41 @@ LoggedStates ReadLoggedStates(const FlightLog& log, const Vehicle& vehicle, cons
 // and leaves the force unchanged (with a first moment it is not I b).
 Eigen::Vector3d TorqueOfAngularAcceleration(const VehicleParameters& parameters, const Eigen::Vector3d& b);
 
+// Sums over the grid samples in the scope of the body's (b) and the model's (m) angular
+// acceleration in each band of TorqueBandEdges, per body axis; t: the error's torque, c: its
+// centre-of-mass equivalent (TorqueBand).
+struct TorqueBandSums {
+  struct Band {
+    long samples = 0;
+    Eigen::Vector3d bb = Eigen::Vector3d::Zero(), mm = Eigen::Vector3d::Zero(), ee = Eigen::Vector3d::Zero(),
+                    bm = Eigen::Vector3d::Zero(), tt = Eigen::Vector3d::Zero(), cc = Eigen::Vector3d::Zero();
+  };
+  std::vector<double> edges;  // band i is [edges[i], edges[i + 1]); the last ends at Nyquist
+  std::vector<Band> bands;
+  void Add(const TorqueBandSums& other);
+  std::vector<TorqueBand> Mean() const;
+};
+
 // Sums of the errors over windows, per group and step ahead (index h - 1), and the number of
-// windows that verify each group.
+// windows that verify each group; the torque comparison over the samples in the scope.
 struct ErrorSums {
   std::array<std::vector<double>, kNumPredictionGroups> model, naive;
   std::array<long, kNumPredictionGroups> windows = {0, 0, 0, 0};
+  TorqueBandSums torque;
   explicit ErrorSums(int horizon_steps = 0, bool with_pose = false);
   void Add(const ErrorSums& other);
   PredictionCurves Mean() const;
 };
+
+// The model's angular acceleration at each logged state with the logged rotor signal: what the
+// simulator's physics gives at the states of the log (one row per grid sample).
+Eigen::MatrixX3d ModelAngularAccelerations(const LoggedStates& states, const MultirotorDynamics& dynamics,
+                                           const MultirotorDynamics::RotorCommand& command);
+
+// The body's angular acceleration (the gyro differentiated) against the model's, by band, over the
+// samples in the scope; `parameters` turn the error into a torque.
+TorqueBandSums CompareTorque(const LoggedStates& states, const VehicleParameters& parameters,
+                             const Eigen::MatrixX3d& model_acceleration);
 
 // Flies the model from every start k = 0, K, 2K, ... whose window k..k+N lies in the scope and adds
 // the errors. Throws rotorid::Error when the model's body cannot be integrated.

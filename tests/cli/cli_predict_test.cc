@@ -81,6 +81,20 @@ TEST_F(CliPredictTest, WritesTheContractKeys) {
   }
   EXPECT_EQ(p["flights"][0]["file"], *dir_ + "/pose.csv");
   EXPECT_EQ(p["flights"][0]["windows"], p["windows"]);
+  // The torque comparison by band, pooled and per flight, in the JSON and the HTML; an identified
+  // model on a low-noise flight follows the body in the bands where it moves.
+  ASSERT_EQ(p.at("torque_bands").size(), 5u);
+  EXPECT_EQ(p["flights"][0].at("torque_bands"), p["torque_bands"]);
+  const nlohmann::json& band = p["torque_bands"][2];
+  EXPECT_EQ(band.at("band"), "1-3 Hz");
+  for (const char* key : {"body_rms_radps2", "model_rms_radps2", "error_rms_radps2", "gain", "correlation",
+                          "error_torque_rms_nm"})
+    EXPECT_TRUE(band.at(key).contains("yaw")) << key;
+  EXPECT_NEAR(band["gain"]["roll"].get<double>(), 1.0, 0.1);
+  EXPECT_FALSE(band.at("centre_of_mass_equivalent_mm").contains("yaw"));
+  EXPECT_TRUE(p["torque_bands"][4].at("high_hz").is_null());  // up to the Nyquist frequency
+  EXPECT_TRUE(p["torque_bands"][0]["gain"]["roll"].is_null());  // the mean band: one value, no slope
+  EXPECT_NE(html.find("by frequency"), std::string::npos);
   bool consistency = false;
   for (const auto& check : r.at("checks")) consistency |= check.at("name") == "physical_consistency";
   EXPECT_TRUE(consistency);

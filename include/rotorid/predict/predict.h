@@ -16,6 +16,7 @@
 // rotor-wrench effects), the rotor signal the refinement's (RotorSignalWithEffects: delay, motor
 // lag, battery, command map), so the prediction flies exactly the model the report identified.
 
+#include <Eigen/Core>
 #include <array>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -89,9 +90,37 @@ struct PredictionCurves {
   bool Verified(PredictionGroup group) const { return !mae[static_cast<int>(group)].empty(); }
 };
 
+// The model's angular acceleration at the logged states against the body's (the corrected gyro,
+// differentiated on the grid) in one frequency band, per body axis (roll, pitch, yaw). A horizon
+// integrates the error: a torque the model lacks below 1 Hz stays through a window and grows the
+// angular velocity error linearly with h, which the naive predictor does not.
+struct TorqueBand {
+  double low_hz = 0.0, high_hz = 0.0;  // [low, high); the last band ends at the grid's Nyquist frequency
+  long samples = 0;                    // grid samples in the scope
+  Eigen::Vector3d body_rms_radps2 = Eigen::Vector3d::Zero(), model_rms_radps2 = Eigen::Vector3d::Zero(),
+                  error_rms_radps2 = Eigen::Vector3d::Zero();
+  // Least-squares slope of the body's on the model's (1: the model's torque is the body's; 0: the body
+  // does not follow it) and their correlation; not a number for the mean band (one value each).
+  Eigen::Vector3d gain = Eigen::Vector3d::Zero(), correlation = Eigen::Vector3d::Zero();
+  // The torque about O_d that the error is (N m), and for roll and pitch how far the centre of mass
+  // would have to move in the rotor plane for the weight to exert it (mm; yaw: 0).
+  Eigen::Vector3d error_torque_rms_nm = Eigen::Vector3d::Zero(), centre_of_mass_equivalent_mm = Eigen::Vector3d::Zero();
+};
+
+// "0-1 Hz", "1-3 Hz", "above 10 Hz": a band's name in the reports.
+std::string TorqueBandName(const TorqueBand& band);
+
+// The roll and pitch gains as "0.57 / 0.56", or "-" for the mean band.
+std::string TorqueBandGainText(const TorqueBand& band);
+
+// The band edges (Hz) of the torque comparison: 0-1, 1-3, 3-10 Hz and above, those below the grid's
+// Nyquist frequency.
+std::vector<double> TorqueBandEdges(double dt_s);
+
 struct FlightPrediction {
   std::string file;
   PredictionCurves curves;
+  std::vector<TorqueBand> torque_bands;
   // How the log's states were taken ("attitude, position from motion capture, velocity from ...").
   std::string states;
 };
@@ -100,6 +129,7 @@ struct PredictResult {
   PredictOptions options;
   std::string block;  // the report block flown
   PredictionCurves pooled;
+  std::vector<TorqueBand> torque_bands;   // over every flight
   std::vector<FlightPrediction> flights;  // one per log, in the order given
   std::vector<FlightInputSummary> inputs;
   std::vector<Check> checks;  // physical_consistency per configuration, windows in scope
@@ -111,7 +141,12 @@ PredictResult RunPredict(const PredictOptions& options);
 // naive_mae, flights[]}, input, checks. docs/report_format.md lists the keys.
 nlohmann::json PredictJson(const PredictResult& result);
 
-// For the console: what was flown, then per group the MAE of the model / naive at h = 1, 10, N.
+// The answer first: how far ahead the model beats the naive predictor per group, and the bands up to
+// 10 Hz in which the body does not follow the model's roll and pitch torque (gain outside 0.7-1.3).
+std::string PredictAnswer(const PredictResult& result);
+
+// For the console: the answer, what was flown, then per group the MAE of the model / naive at h = 1,
+// 10, N, and the torque comparison by band.
 std::string PredictBriefReport(const PredictResult& result);
 
 // The HTML report: MAE(h) per group beside the naive curve (inline SVG), the table at h = 1, 10, N,
