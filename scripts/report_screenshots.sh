@@ -4,7 +4,8 @@
 # folder, and takes headless Chromium screenshots of each report into docs/figures/
 # (report_identify.png, report_refine.png, report_diagnose.png). With the shared real flights
 # present (../shared/data/real), also the identify report of the brushed Crazyflie flight jana01
-# (report_real_identify.png).
+# (report_real_identify.png), and with NanoBench's flights the predict report of B2 + B8 from a model
+# refined on B3 + B5 + B10 (report_real_predict.png).
 #
 #   scripts/report_screenshots.sh            # needs build/release/apps/rotorid (rotorid_cli), gnuplot, chromium
 #   ROTORID=path/to/rotorid OUT=dir scripts/report_screenshots.sh
@@ -24,13 +25,14 @@ trap 'rm -rf "$TMP"' EXIT
 mkdir -p "$OUT"
 D=data/sim
 
-# shot NAME REPORT_DIR HEIGHT_PX [SCALE]: the top HEIGHT_PX (CSS pixels) of REPORT_DIR/report.html.
+# shot NAME REPORT_DIR HEIGHT_PX [SCALE [PAGE]]: the top HEIGHT_PX (CSS pixels) of REPORT_DIR/PAGE
+# (report.html).
 shot() {
-  local name=$1 dir=$2 height=$3 scale=${4:-$SCALE}
+  local name=$1 dir=$2 height=$3 scale=${4:-$SCALE} page=${5:-report.html}
   "$CHROMIUM" --headless --disable-gpu --no-sandbox --hide-scrollbars --force-device-scale-factor="$scale" \
     --disable-quic --no-first-run --disable-background-networking --disable-component-update --disable-sync \
     --user-data-dir="$TMP/chromium-profile" \
-    --screenshot="$OUT/$name.png" --window-size=1280,"$height" "file://$(realpath "$dir")/report.html" \
+    --screenshot="$OUT/$name.png" --window-size=1280,"$height" "file://$(realpath "$dir")/$page" \
     > "$TMP/chromium.log" 2>&1 || { cat "$TMP/chromium.log" >&2; exit 1; }
   echo "$OUT/$name.png: $(du -k "$OUT/$name.png" | cut -f1) KB"
 }
@@ -58,4 +60,19 @@ if [ -e "$REAL" ]; then
   "$R" identify -q --vehicle data/vehicles/crazyflie21_brushed.yaml --log "$REAL" --allow-partial \
     --report "$TMP/real"
   shot report_real_identify "$TMP/real" 3600
+fi
+
+NANOBENCH=../shared/data/real/nanobench-cf21
+if [ -d "$NANOBENCH" ]; then
+  NV=data/vehicles/crazyflie21_nanobench.yaml
+  NM=data/column_maps/nanobench_cf21.yaml
+  # docs/prediction.md's model; exit 3 (its checks warn of the yaw axis) still writes the report.
+  "$R" refine -q --vehicle $NV --log $NANOBENCH/B3_figure8_fast_rep2.csv --vehicle $NV \
+    --log $NANOBENCH/B5_helix_fast_rep1.csv --vehicle $NV --log $NANOBENCH/B10_lissajous_fast_rep1.csv \
+    --column-map $NM --all-parameters --first-moment per-flight --effects delay,motor_lag,battery,rotor_drag \
+    --allow-partial --json "$TMP/nanobench.json" || [ $? -eq 3 ]
+  "$R" predict -q --params "$TMP/nanobench.json" --vehicle $NV --log $NANOBENCH/B2_circle_fast_rep2.csv \
+    --vehicle $NV --log $NANOBENCH/B8_star_fast_rep1.csv --column-map $NM --set cf21_nanobench.I_zz=2.98e-5 \
+    --set kd=0 --torque-bias-window 0.05 --report "$TMP/predict"
+  shot report_real_predict "$TMP/predict" 1500 "$SCALE" predict.html
 fi
