@@ -23,7 +23,8 @@ std::vector<double> TorqueBandEdges(double dt_s) {
 
 std::string TorqueBandName(const TorqueBand& band) {
   if (band.high_hz == 0.0) return "mean";
-  if (!std::isfinite(band.high_hz)) return "above " + ShortNumber(band.low_hz) + " Hz";
+  if (!std::isfinite(band.high_hz))
+    return band.low_hz > 0.0 ? "above " + ShortNumber(band.low_hz) + " Hz" : "all but the mean";  // a coarse grid
   return ShortNumber(band.low_hz) + "-" + ShortNumber(band.high_hz) + " Hz";
 }
 

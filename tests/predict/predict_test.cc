@@ -144,6 +144,21 @@ TEST(PredictTest, TorqueBandsShowWhereTheModelsTorqueIsNotTheBodys) {
   EXPECT_LT(mean.centre_of_mass_equivalent_mm[0], 0.1);
 }
 
+// A coarse prediction grid keeps only the band edges well below its Nyquist frequency.
+TEST(PredictTest, TorqueBandEdgesFollowTheGrid) {
+  EXPECT_EQ(TorqueBandEdges(0.01), (std::vector<double>{0.0, 0.0, 1.0, 3.0, 10.0}));
+  EXPECT_EQ(TorqueBandEdges(0.2), (std::vector<double>{0.0, 0.0, 1.0}));  // Nyquist 2.5 Hz
+  EXPECT_EQ(TorqueBandEdges(0.5), (std::vector<double>{0.0, 0.0}));
+  TorqueBand band;
+  EXPECT_EQ(TorqueBandName(band), "mean");
+  band.high_hz = HUGE_VAL;
+  EXPECT_EQ(TorqueBandName(band), "all but the mean");
+  band.low_hz = 1.0;
+  EXPECT_EQ(TorqueBandName(band), "above 1 Hz");
+  band.high_hz = 3.0;
+  EXPECT_EQ(TorqueBandName(band), "1-3 Hz");
+}
+
 TEST(PredictTest, TrueEffectsReproduceTheSimulatorToTheLagsDiscretisation) {
   const std::string dir = testing::MakeTempDir("predict-effects");
   Effects effects;
