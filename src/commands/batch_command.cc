@@ -7,7 +7,6 @@
 
 #include <atomic>
 #include <cerrno>
-#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -16,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/temp_dir.h"
 #include "rotorid/core/error.h"
 #include "rotorid/core/interrupt.h"
 #include "rotorid/core/process.h"
@@ -139,37 +139,12 @@ class LineWriter {
   std::mutex mutex_;
 };
 
-// A scratch folder for the entries' reports under $TMPDIR (else /tmp), removed however the run
-// ends: by its destructor, or by the Ctrl-C cleanup.
-class ScratchFolder {
- public:
-  ScratchFolder() {
-    const char* tmpdir = std::getenv("TMPDIR");
-    std::string name = std::string(tmpdir != nullptr && *tmpdir != '\0' ? tmpdir : "/tmp") + "/rotorid-batch-XXXXXX";
-    const InterruptDeferral registered_once_created;
-    if (::mkdtemp(name.data()) == nullptr)
-      throw Error("batch: cannot create a scratch folder " + name + ": " + std::strerror(errno));
-    path_ = name;
-    RegisterTemporaryPath(path_);
-  }
-  ~ScratchFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-    UnregisterTemporaryPath(path_);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
-
 // Runs the entries on `jobs` threads; the first error (the output cannot be written) stops the
 // others after their current entry and is thrown here. Returns the number that failed.
 size_t RunEntries(const BatchCommandOptions& options, const std::vector<BatchEntry>& entries,
                   const std::vector<size_t>& todo, LineWriter* writer) {
-  const ScratchFolder scratch;
+  // The entries' reports, removed however the run ends (also by the Ctrl-C cleanup).
+  const internal::TempDir scratch("rotorid-batch");
   Progress progress("batch", static_cast<int64_t>(todo.size()), options.quiet);
   std::atomic<size_t> next{0}, finished{0}, failed{0};
   std::mutex error_mutex;

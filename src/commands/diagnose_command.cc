@@ -91,8 +91,7 @@ ReportInput DiagnoseReportInput(const DiagnoseCommandResult& result) {
                                          &result.validation, DiagnoseSettingsJson(diagnosis));
   input.diagnosis = &d;
   input.checks = result.checks;
-  input.flights = ReportFlights(result.flights, /*held_out=*/false);
-  for (const ReportFlight& f : ReportFlights(result.held_out, /*held_out=*/true)) input.flights.push_back(f);
+  input.flights = ReportFlights(result.flights, result.held_out);
   input.parameter_sets = {{"linear", PredictedParameters(d.linear_parameters, d.linear_predicts_with), Effects()}};
   if (!d.final_model.empty())
     input.parameter_sets.push_back(

@@ -154,8 +154,7 @@ ReportInput RefineReportInput(const RefineCommandResult& result) {
     input.relative_errors = {{"held-out flights", "linear", result.held_out_linear.relative_error_pct},
                              {"held-out flights", "refined", result.held_out_refined.relative_error_pct}};
   input.checks = result.checks;
-  input.flights = ReportFlights(result.linear.flights, /*held_out=*/false);
-  for (const ReportFlight& f : ReportFlights(result.held_out, /*held_out=*/true)) input.flights.push_back(f);
+  input.flights = ReportFlights(result.linear.flights, result.held_out);
   input.parameter_sets = {{"linear", result.held_out_linear.values, Effects()},
                           {"refined", result.held_out_refined.values, result.refined.effects}};
   return input;

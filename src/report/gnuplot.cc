@@ -3,16 +3,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
 
 #include "rotorid/core/error.h"
-#include "rotorid/core/interrupt.h"
 #include "rotorid/core/process.h"
 
 namespace rotorid::internal {
@@ -96,24 +93,6 @@ ProcessResult RunGnuplotScript(const std::string& executable, const std::string&
       result.error_text = "gnuplot exited with status " + std::to_string(result.exit_code);
   }
   return result;
-}
-
-TempDir::TempDir(const std::string& prefix) {
-  std::error_code ec;
-  std::filesystem::path base = std::filesystem::temp_directory_path(ec);
-  if (ec) base = "/tmp";
-  std::string pattern = (base / (prefix + "-XXXXXX")).string();
-  const InterruptDeferral registered_once_created;
-  if (!::mkdtemp(pattern.data()))
-    throw Error("cannot create a temporary directory in " + base.string() + ": " + std::strerror(errno));
-  path_ = pattern;
-  RegisterTemporaryPath(path_);
-}
-
-TempDir::~TempDir() {
-  std::error_code ec;
-  std::filesystem::remove_all(path_, ec);
-  UnregisterTemporaryPath(path_);
 }
 
 }  // namespace rotorid::internal

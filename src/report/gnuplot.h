@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "core/temp_dir.h"  // TempDir, for the scripts
+
 namespace rotorid::internal {
 
 // The executable for `name`: itself when it contains '/', else the first match on PATH. Empty
@@ -33,19 +35,5 @@ struct ProcessResult {
 // Kills it after `timeout_s`.
 ProcessResult RunGnuplotScript(const std::string& executable, const std::string& script_path,
                                const std::string& stderr_path, double timeout_s);
-
-// A fresh private temporary directory, removed with its content on destruction.
-class TempDir {
- public:
-  // Throws rotorid::Error when it cannot be created.
-  explicit TempDir(const std::string& prefix);
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
 
 }  // namespace rotorid::internal

@@ -941,6 +941,13 @@ std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flig
   return out;
 }
 
+std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flights,
+                                        const std::vector<ProcessedFlight>& held_out) {
+  std::vector<ReportFlight> out = ReportFlights(flights, /*held_out=*/false);
+  for (const ReportFlight& f : ReportFlights(held_out, /*held_out=*/true)) out.push_back(f);
+  return out;
+}
+
 std::vector<ParameterSet> ParameterSetsFromReport(const json& report, const std::string& source) {
   std::vector<ParameterSet> sets;
   for (const char* block : {"linear", "refined"}) {

@@ -134,6 +134,9 @@ ReportSummary WriteHtmlReport(const std::string& dir, const ReportInput& input, 
 
 // Report flights for processed flights, labelled by their log's file name.
 std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flights, bool held_out);
+// The identification flights, then the held-out ones (marked held out).
+std::vector<ReportFlight> ReportFlights(const std::vector<ProcessedFlight>& flights,
+                                        const std::vector<ProcessedFlight>& held_out);
 
 // The parameter sets a saved identify/refine report (read from `source`) holds: "linear" (no
 // effects) and "refined" (with its "refined.effects"), each when present, with the values each
